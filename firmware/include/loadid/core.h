@@ -1,0 +1,10 @@
+/* loadid estimation core: the whole C API. */
+#ifndef LOADID_CORE_H
+#define LOADID_CORE_H
+
+#include "loadid/types.h"
+#include "loadid/regressor.h"
+#include "loadid/estimator.h"
+#include "loadid/inertia.h"
+
+#endif /* LOADID_CORE_H */

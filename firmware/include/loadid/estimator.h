@@ -1,0 +1,153 @@
+/*
+ * Estimators of the inertial parameters behind one small interface:
+ * create (the only allocation), update with one sample, estimate, reset.
+ *
+ *   RLS        eqs. (17)-(19), noise covariance Lambda, optional forgetting
+ *   RIV        eqs. (20)-(22), instruments C_k given as a second regressor
+ *   RTLS       eqs. (24)-(36): Brand's incremental SVD of the weighted
+ *              [A y] (left singular vectors and values only), the volume
+ *              test of eq. (31), a Householder transform when the smallest
+ *              singular value is not unique, the estimate of eq. (36)
+ *   LS_BATCH   weighted least squares over all stored rows (reference)
+ *   TLS_BATCH  one SVD over all stored, weighted rows (reference)
+ *
+ * Every method works on n_params = 10 (eq. 5, zeroed wrench) or 16
+ * ([phi; offset], regressor [A E6]). Matrices are row-major.
+ * After create, no function here allocates, locks or makes a system call.
+ * An update whose input holds NaN or Inf returns LOADID_E_NONFINITE and
+ * leaves the estimator exactly as it was.
+ */
+#ifndef LOADID_ESTIMATOR_H
+#define LOADID_ESTIMATOR_H
+
+#include <stdint.h>
+
+#include "loadid/types.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The values match estimate_t's constants in proto/ (DESIGN.md). */
+typedef enum {
+    LOADID_METHOD_RLS = 1,
+    LOADID_METHOD_RIV = 2,
+    LOADID_METHOD_RTLS = 3,
+    LOADID_METHOD_LS_BATCH = 4,
+    LOADID_METHOD_TLS_BATCH = 5
+} loadid_method_t;
+
+/* Immutable configuration of one estimator. loadid_est_config_default()
+ * fills every field; change what you need before create. */
+typedef struct {
+    loadid_method_t method;
+    int n_params;                  /* 10 or 16 */
+    /* Standard deviation of the noise of each wrench row [N, N, N, Nm, Nm,
+     * Nm]. RLS/RIV use Lambda = diag(row_sigma^2) (eqs. 17, 20); RTLS and
+     * the batch methods use the row weights D = diag(1 / row_sigma) (eq. 24).
+     * Default 1 for every row. */
+    loadid_real_t row_sigma[LOADID_NROWS];
+    /* Column weights T (eq. 24): n_params + 1 entries, the last for the
+     * wrench column [-]. Used by RTLS and TLS_BATCH; default 1. */
+    loadid_real_t col_weight[LOADID_MAX_PARAMS + 1];
+    /* RLS/RIV: initial covariance Sigma_0 = p0 * I [units of phi^2] and
+     * initial estimate 0. Default 1e6. */
+    loadid_real_t p0;
+    /* RLS/RIV: exponential forgetting factor in (0, 1]; 1 = none (default). */
+    loadid_real_t forgetting;
+    /* RTLS: samples stacked for the initial SVD (eq. 24), 2 or 3. Default 2. */
+    int rtls_init_samples;
+    /* RTLS: relative tolerance under which the volume of eq. (31) counts as
+     * zero and two singular values count as equal; a multiple of the
+     * machine epsilon of loadid_real_t. Default 64 eps. */
+    loadid_real_t rtls_eps;
+    /* RTLS: re-orthogonalise U when ||U^T U - I||_F exceeds this; 0 turns
+     * re-orthogonalisation off. Default 1e3 eps. */
+    loadid_real_t rtls_ortho_tol;
+    /* Batch methods: how many samples the row store holds. Default 4000
+     * (4 s at 1 kHz); an update beyond it returns LOADID_E_FULL. */
+    int batch_capacity;
+    /* Excitation: estimate() reports LOADID_E_NOT_EXCITED while the
+     * condition number of the weighted data matrix D A T exceeds this [-].
+     * Default 1e6 (double) / 1e4 (float). */
+    loadid_real_t max_condition;
+} loadid_est_config_t;
+
+/* What estimate() reports beside phi. */
+typedef struct {
+    int64_t samples;               /* samples used so far */
+    loadid_real_t condition_number;/* kappa of D A_Xi T (columns of A only);
+                                      +Inf when rank-deficient */
+    loadid_real_t sigma_min;       /* RTLS, TLS_BATCH: smallest singular value
+                                      of D [A y] T; 0 for the others */
+    int sigma_min_multiplicity;    /* RTLS, TLS_BATCH: p of the Householder
+                                      step (1 = unique); 0 for the others */
+    int reorthogonalisations;      /* RTLS: times U was re-orthogonalised */
+    loadid_real_t orthogonality_error; /* RTLS: ||U^T U - I||_F now */
+} loadid_est_info_t;
+
+typedef struct loadid_est loadid_est_t; /* opaque */
+
+/* Fills cfg with the defaults above for this method and parameter count.
+ * Returns 0, or -EINVAL for a NULL cfg, an unknown method or n_params not
+ * 10 or 16. */
+int loadid_est_config_default(loadid_method_t method, int n_params,
+                              loadid_est_config_t *cfg);
+
+/* Sets row_sigma and col_weight from physical noise levels, so that after
+ * weighting every entry of D [A y] T carries noise of about the same size
+ * (the premise of TLS). sigma_f [N], sigma_tau [Nm]: wrench noise;
+ * sigma_spec [m/s^2]: noise of a - g; sigma_alpha [rad/s^2]: noise of the
+ * angular acceleration; sigma_omega [rad/s] and omega_typ [rad/s]: noise and
+ * typical size of the angular velocity (its products enter eq. 6).
+ * Returns 0, -EINVAL (NULL cfg) or -EDOM (a level not finite and > 0;
+ * omega_typ may be 0). */
+int loadid_est_weights_from_noise(loadid_est_config_t *cfg,
+                                  loadid_real_t sigma_f, loadid_real_t sigma_tau,
+                                  loadid_real_t sigma_spec, loadid_real_t sigma_alpha,
+                                  loadid_real_t sigma_omega, loadid_real_t omega_typ);
+
+/* Allocates and initialises an estimator (the only allocation it ever
+ * makes). Returns 0 and sets *out, -EINVAL for a NULL pointer or an invalid
+ * configuration (a weight or sigma not finite and > 0, forgetting outside
+ * (0, 1], init samples not 2 or 3, capacity < 1), or -ENOMEM. */
+int loadid_est_create(const loadid_est_config_t *cfg, loadid_est_t **out);
+
+/* Frees it; NULL is allowed. */
+void loadid_est_destroy(loadid_est_t *est);
+
+/* Back to the state right after create. Returns 0 or -EINVAL. */
+int loadid_est_reset(loadid_est_t *est);
+
+/* Adds one sample. A: 6 x n_params data matrix (eq. 6, 9 or [A E6]);
+ * y: the measured wrench [f; tau] (zeroed for n_params = 10 when the
+ * zeroing term is in A). C: RIV instruments, same shape as A (required for
+ * RIV, ignored by the others, may be NULL).
+ * Returns 0; -EINVAL (NULL pointer); LOADID_E_NONFINITE (nothing changed);
+ * LOADID_E_FULL (batch store full, nothing changed). */
+int loadid_est_update(loadid_est_t *est, const loadid_real_t *A,
+                      const loadid_real_t *C, const loadid_real_t y[6]);
+
+/* The current estimate: phi (n_params values; eq. 5 then, for 16, the
+ * offset) and info (may be NULL).
+ * Returns 0; -EINVAL; LOADID_E_NOT_EXCITED when too few samples or the
+ * weighted data matrix is rank-deficient or worse conditioned than
+ * max_condition (phi is then all zeros, info is filled);
+ * LOADID_E_NO_SOLUTION (TLS only: eq. 36 has no solution; phi zeros).
+ * phi never holds NaN or Inf. */
+int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi,
+                        loadid_est_info_t *info);
+
+/* The configuration the estimator was created with. */
+const loadid_est_config_t *loadid_est_config(const loadid_est_t *est);
+
+/* Short name of a method ("RTLS"...) or "?"; parse back with
+ * loadid_method_from_name (returns the method or -EINVAL). */
+const char *loadid_method_name(loadid_method_t method);
+int loadid_method_from_name(const char *name);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* LOADID_ESTIMATOR_H */

@@ -1,0 +1,100 @@
+// Batch references: every sample's raw [A y] rows are stored (the store is
+// allocated once, at create), and estimate() solves from scratch over all of
+// them, with the same weights as the recursive methods:
+//   LS_BATCH  min || D (A phi - y) ||, Lambda = D^-2 as in RLS;
+//   TLS_BATCH one SVD of all stacked rows D [A y] T, computed as the QR of
+//             the rows followed by the SVD of the triangular factor, then the
+//             same Householder step and eq. (36) as RTLS.
+#pragma once
+
+#include <memory>
+#include <new>
+
+#include "estimator_base.hpp"
+#include "excitation.hpp"
+#include "givens_qr.hpp"
+#include "tls_solution.hpp"
+
+namespace loadid {
+
+template <int N>
+class Batch final : public loadid_est {
+    static constexpr int N1 = N + 1;
+    using MatR = Eigen::Matrix<Real, N1, N1>;
+
+public:
+    explicit Batch(const loadid_est_config_t &c)
+        : loadid_est(c), d_(row_weights<N>(c)), t_(col_weights<N>(c)),
+          excitation_(d_, t_.template head<N>()) {}
+
+    // The one allocation; false when out of memory.
+    bool allocate() {
+        const size_t n = static_cast<size_t>(cfg.batch_capacity) * LOADID_NROWS * N1;
+        rows_.reset(new (std::nothrow) Real[n]);
+        reset();
+        return rows_ != nullptr;
+    }
+
+    void reset() override {
+        samples_ = 0;
+        excitation_.reset();
+    }
+
+    int update(const Real *a, const Real *, const Real *y) override {
+        if (samples_ >= cfg.batch_capacity) return LOADID_E_FULL;
+        Real *dst = rows_.get() + static_cast<size_t>(samples_) * LOADID_NROWS * N1;
+        for (int i = 0; i < LOADID_NROWS; ++i) {
+            for (int j = 0; j < N; ++j) dst[i * N1 + j] = a[i * N + j];
+            dst[i * N1 + N] = y[i];
+        }
+        excitation_.add(Regressor<N>(ConstRegressorMap<N>(a)));
+        ++samples_;
+        return 0;
+    }
+
+    int estimate(Real *phi, loadid_est_info_t *info) const override {
+        const Real kappa = excitation_.condition();
+        if (info) {
+            *info = loadid_est_info_t{};
+            info->samples = samples_;
+            info->condition_number = kappa;
+        }
+        Eigen::Map<Vec<N>> out(phi);
+        out.setZero();
+        if (samples_ < 2 || !(kappa <= cfg.max_condition)) return LOADID_E_NOT_EXCITED;
+
+        MatR R = MatR::Zero();  // QR of all rows D [A y], from scratch
+        for (int64_t k = 0; k < samples_ * LOADID_NROWS; ++k) {
+            const Eigen::Map<const Vec<N1>> row(rows_.get() + k * N1);
+            givens_add_row<N1>(R, d_(static_cast<int>(k % LOADID_NROWS)) * row);
+        }
+        if (cfg.method == LOADID_METHOD_LS_BATCH) {
+            // R = [R11 r12; 0 r22]: phi = R11^-1 r12.
+            const auto R11 = R.template topLeftCorner<N, N>();
+            Vec<N> sol = R.col(N).template head<N>();
+            R11.template triangularView<Eigen::Upper>().solveInPlace(sol);
+            if (!sol.allFinite()) return LOADID_E_NOT_EXCITED;
+            out = sol;
+            return 0;
+        }
+        const MatR RT = R * t_.asDiagonal();
+        const Eigen::JacobiSVD<MatR> svd(RT, Eigen::ComputeFullV);
+        const TlsSolution<N> sol = tls_solution<N>(svd.matrixV(), svd.singularValues(), t_, cfg.rtls_eps);
+        if (info) {
+            info->sigma_min = svd.singularValues()(N);
+            info->sigma_min_multiplicity = sol.multiplicity;
+        }
+        if (sol.status) return sol.status;
+        out = sol.phi;
+        return 0;
+    }
+
+private:
+    const Vec6 d_;
+    const Vec<N1> t_;
+    Excitation<N> excitation_;
+    std::unique_ptr<Real[]> rows_;
+    int64_t samples_ = 0;
+};
+
+}  // namespace loadid

@@ -1,0 +1,21 @@
+// loadid_strerror and the build's scalar (loadid/types.h).
+#include <cstring>
+
+#include "loadid/types.h"
+
+extern "C" const char *loadid_strerror(int code) {
+    switch (code) {
+        case 0: return "success";
+        case LOADID_E_NONFINITE: return "input holds NaN or Inf (rejected, state unchanged)";
+        case LOADID_E_NOT_EXCITED: return "not excited: too few samples or rank-deficient data";
+        case LOADID_E_NO_SOLUTION: return "no TLS solution: last component of the TLS vector is zero";
+        case LOADID_E_FULL: return "batch estimator full: raise batch_capacity";
+        default: break;
+    }
+    if (code < 0 && code > -1000) return std::strerror(-code);
+    return "unknown error";
+}
+
+extern "C" int loadid_scalar_is_float(void) {
+    return sizeof(loadid_real_t) == sizeof(float) ? 1 : 0;
+}

@@ -1,0 +1,178 @@
+// C API of the estimators (loadid/estimator.h): configuration, dispatch on
+// method and parameter count, and the checks at the boundary.
+#include "loadid/estimator.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <new>
+
+#include "batch.hpp"
+#include "finite.hpp"
+#include "rls.hpp"
+#include "rtls.hpp"
+
+using namespace loadid;
+
+namespace {
+
+bool positive_finite(Real v) { return std::isfinite(v) && v > 0; }
+
+bool valid_method(int m) { return m >= LOADID_METHOD_RLS && m <= LOADID_METHOD_TLS_BATCH; }
+
+bool valid_config(const loadid_est_config_t &c) {
+    if (!valid_method(c.method)) return false;
+    if (c.n_params != LOADID_NPHI && c.n_params != LOADID_NPHI_OFFSET) return false;
+    for (int i = 0; i < LOADID_NROWS; ++i)
+        if (!positive_finite(c.row_sigma[i])) return false;
+    for (int j = 0; j <= c.n_params; ++j)
+        if (!positive_finite(c.col_weight[j])) return false;
+    if (!positive_finite(c.p0)) return false;
+    if (!(c.forgetting > 0 && c.forgetting <= 1)) return false;
+    if (c.rtls_init_samples < 2 || c.rtls_init_samples > 3) return false;
+    if (!positive_finite(c.rtls_eps) || !std::isfinite(c.rtls_ortho_tol) || c.rtls_ortho_tol < 0)
+        return false;
+    if (c.batch_capacity < 1) return false;
+    return positive_finite(c.max_condition);
+}
+
+template <int N>
+loadid_est *make(const loadid_est_config_t &c) {
+    switch (c.method) {
+        case LOADID_METHOD_RLS:
+        case LOADID_METHOD_RIV: return new (std::nothrow) RecursiveLs<N>(c);
+        case LOADID_METHOD_RTLS: return new (std::nothrow) Rtls<N>(c);
+        case LOADID_METHOD_LS_BATCH:
+        case LOADID_METHOD_TLS_BATCH: {
+            auto *b = new (std::nothrow) Batch<N>(c);
+            if (b && !b->allocate()) {
+                delete b;
+                return nullptr;
+            }
+            return b;
+        }
+    }
+    return nullptr;
+}
+
+const char *const kNames[] = {"?", "RLS", "RIV", "RTLS", "LS_BATCH", "TLS_BATCH"};
+
+}  // namespace
+
+extern "C" int loadid_est_config_default(loadid_method_t method, int n_params,
+                                         loadid_est_config_t *cfg) {
+    if (!cfg || !valid_method(method)) return -EINVAL;
+    if (n_params != LOADID_NPHI && n_params != LOADID_NPHI_OFFSET) return -EINVAL;
+    std::memset(cfg, 0, sizeof *cfg);
+    cfg->method = method;
+    cfg->n_params = n_params;
+    for (auto &s : cfg->row_sigma) s = 1;
+    for (int j = 0; j <= n_params; ++j) cfg->col_weight[j] = 1;
+    cfg->p0 = Real(1e6);
+    cfg->forgetting = 1;
+    cfg->rtls_init_samples = 2;
+    cfg->rtls_eps = 64 * kEps;
+    cfg->rtls_ortho_tol = 1000 * kEps;
+    cfg->batch_capacity = 4000;
+    cfg->max_condition = sizeof(Real) == sizeof(float) ? Real(1e3) : Real(1e6);
+    return 0;
+}
+
+extern "C" int loadid_est_weights_from_noise(loadid_est_config_t *cfg, loadid_real_t sigma_f,
+                                             loadid_real_t sigma_tau, loadid_real_t sigma_spec,
+                                             loadid_real_t sigma_alpha, loadid_real_t sigma_omega,
+                                             loadid_real_t omega_typ) {
+    if (!cfg) return -EINVAL;
+    if (!positive_finite(sigma_f) || !positive_finite(sigma_tau) || !positive_finite(sigma_spec) ||
+        !positive_finite(sigma_alpha) || !positive_finite(sigma_omega) ||
+        !std::isfinite(omega_typ) || omega_typ < 0)
+        return -EDOM;
+    // Rows: D = diag(1/sigma_y), so the wrench column carries unit noise
+    // with t_{n+1} = 1.
+    for (int i = 0; i < 3; ++i) {
+        cfg->row_sigma[i] = sigma_f;
+        cfg->row_sigma[i + 3] = sigma_tau;
+    }
+    // Columns: TLS removes the bias of LS by assuming E[E^T E] of the
+    // weighted error is a multiple of I. Eq. (6) has structural zeros, so
+    // columns differ in how many of their entries are noisy: t_j is set so
+    // that the summed noise variance of every column equals that of the
+    // wrench column (6 rows of unit variance after D). Per row, an entry
+    // made of alpha adds sigma_alpha^2, one of a - g sigma_spec^2, and each
+    // w_i w_j product about q = 2 |w|^2 sigma_w^2 (first order).
+    const Real b2 = sigma_alpha * sigma_alpha, s2 = sigma_spec * sigma_spec;
+    const Real q = Real(2) * omega_typ * omega_typ * sigma_omega * sigma_omega;
+    const Real if2 = Real(1) / (sigma_f * sigma_f), it2 = Real(1) / (sigma_tau * sigma_tau);
+    const Real col_var[LOADID_NPHI] = {
+        Real(3) * s2 * if2,                                   // m: a - g in 3 force rows
+        (Real(2) * b2 + Real(3) * q) * if2 + Real(2) * s2 * it2,  // m c_x: 2 alpha, 3 w w; 2 a - g
+        (Real(2) * b2 + Real(3) * q) * if2 + Real(2) * s2 * it2,  // m c_y
+        (Real(2) * b2 + Real(3) * q) * if2 + Real(2) * s2 * it2,  // m c_z
+        (b2 + Real(2) * q) * it2,                             // Ixx: alpha_x, 2 w w
+        (Real(2) * b2 + Real(3) * q) * it2,                   // Ixy
+        (Real(2) * b2 + Real(3) * q) * it2,                   // Ixz
+        (b2 + Real(2) * q) * it2,                             // Iyy
+        (Real(2) * b2 + Real(3) * q) * it2,                   // Iyz
+        (b2 + Real(2) * q) * it2,                             // Izz
+    };
+    for (int j = 0; j < LOADID_NPHI; ++j) cfg->col_weight[j] = std::sqrt(Real(LOADID_NROWS) / col_var[j]);
+    if (cfg->n_params == LOADID_NPHI_OFFSET) {
+        // The offset columns [E6] are exact: a large weight makes TLS treat
+        // them as (nearly) error-free, the mixed LS-TLS limit.
+        for (int j = LOADID_NPHI; j < LOADID_NPHI_OFFSET; ++j) cfg->col_weight[j] = Real(1e3);
+    }
+    cfg->col_weight[cfg->n_params] = 1;
+    return 0;
+}
+
+extern "C" int loadid_est_create(const loadid_est_config_t *cfg, loadid_est_t **out) {
+    if (!cfg || !out) return -EINVAL;
+    *out = nullptr;
+    if (!valid_config(*cfg)) return -EINVAL;
+    loadid_est *e = cfg->n_params == LOADID_NPHI ? make<LOADID_NPHI>(*cfg)
+                                                 : make<LOADID_NPHI_OFFSET>(*cfg);
+    if (!e) return -ENOMEM;
+    *out = e;
+    return 0;
+}
+
+extern "C" void loadid_est_destroy(loadid_est_t *est) { delete est; }
+
+extern "C" int loadid_est_reset(loadid_est_t *est) {
+    if (!est) return -EINVAL;
+    est->reset();
+    return 0;
+}
+
+extern "C" int loadid_est_update(loadid_est_t *est, const loadid_real_t *A,
+                                 const loadid_real_t *C, const loadid_real_t y[6]) {
+    if (!est || !A || !y) return -EINVAL;
+    const int n = est->cfg.n_params;
+    const bool riv = est->cfg.method == LOADID_METHOD_RIV;
+    if (riv && !C) return -EINVAL;
+    if (!all_finite(A, LOADID_NROWS * n) || !all_finite(y, LOADID_NROWS) ||
+        (riv && !all_finite(C, LOADID_NROWS * n)))
+        return LOADID_E_NONFINITE;
+    return est->update(A, C, y);
+}
+
+extern "C" int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi,
+                                   loadid_est_info_t *info) {
+    if (!est || !phi) return -EINVAL;
+    return est->estimate(phi, info);
+}
+
+extern "C" const loadid_est_config_t *loadid_est_config(const loadid_est_t *est) {
+    return est ? &est->cfg : nullptr;
+}
+
+extern "C" const char *loadid_method_name(loadid_method_t method) {
+    return valid_method(method) ? kNames[method] : kNames[0];
+}
+
+extern "C" int loadid_method_from_name(const char *name) {
+    if (!name) return -EINVAL;
+    for (int m = LOADID_METHOD_RLS; m <= LOADID_METHOD_TLS_BATCH; ++m)
+        if (std::strcmp(name, kNames[m]) == 0) return m;
+    return -EINVAL;
+}

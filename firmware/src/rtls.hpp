@@ -1,0 +1,185 @@
+// Recursive total least squares, eqs. (24)-(36): Brand's incremental SVD of
+// M = [D [A y] T]^T (one 6-column block N_k per sample, eq. 26), keeping the
+// left singular vectors U and singular values S only (V is never needed for
+// the TLS solution), then the Householder step and eq. (36).
+//
+// U is stored as a full (N+1)x(N+1) matrix whose first r columns are the
+// current basis (r = rank of M so far) and whose other columns are zero, so
+// every product has a compile-time size: no heap, in any branch.
+#pragma once
+
+#include <cmath>
+
+#include "estimator_base.hpp"
+#include "excitation.hpp"
+#include "tls_solution.hpp"
+
+namespace loadid {
+
+template <int N>
+class Rtls final : public loadid_est {
+    static constexpr int N1 = N + 1;
+    static constexpr int kMaxInit = 3 * LOADID_NROWS;
+    using MatU = Eigen::Matrix<Real, N1, N1>;
+    using Block = Eigen::Matrix<Real, N1, LOADID_NROWS>;
+    using MatZ = Eigen::Matrix<Real, N1, N1 + LOADID_NROWS>;
+
+public:
+    explicit Rtls(const loadid_est_config_t &c)
+        : loadid_est(c), d_(row_weights<N>(c)), t_(col_weights<N>(c)),
+          excitation_(d_, t_.template head<N>()) { reset(); }
+
+    void reset() override {
+        U_.setZero();
+        s_.setZero();
+        init_.setZero();
+        rank_ = 0;
+        init_count_ = 0;
+        samples_ = 0;
+        reorth_ = 0;
+        ortho_error_ = 0;
+    }
+
+    int update(const Real *a, const Real *, const Real *y) override {
+        const ConstRegressorMap<N> A(a);
+        Eigen::Matrix<Real, LOADID_NROWS, N1, Eigen::RowMajor> Ay;
+        Ay.template leftCols<N>() = A;
+        Ay.col(N) = Eigen::Map<const Vec6>(y);
+        // N_k = [D [A_k y_k] T]^T, eq. (26).
+        const Block Nk = (d_.asDiagonal() * Ay * t_.asDiagonal()).transpose();
+        excitation_.add(Regressor<N>(A));
+        ++samples_;
+        if (init_count_ < cfg.rtls_init_samples) {
+            init_.template block<N1, LOADID_NROWS>(0, LOADID_NROWS * init_count_) = Nk;
+            if (++init_count_ == cfg.rtls_init_samples) initial_svd();
+            return 0;
+        }
+        brand_update(Nk);
+        check_orthogonality();
+        return 0;
+    }
+
+    int estimate(Real *phi, loadid_est_info_t *info) const override {
+        const Real kappa = excitation_.condition();
+        if (info) {
+            *info = loadid_est_info_t{};
+            info->samples = samples_;
+            info->condition_number = kappa;
+            info->sigma_min = rank_ == N1 ? s_(N) : Real(0);
+            info->reorthogonalisations = reorth_;
+            info->orthogonality_error = ortho_error_;
+        }
+        Eigen::Map<Vec<N>> out(phi);
+        out.setZero();
+        if (init_count_ < cfg.rtls_init_samples || !(kappa <= cfg.max_condition))
+            return LOADID_E_NOT_EXCITED;
+        // The directions M has not reached (rank r < N+1) are the orthogonal
+        // complement of U, with singular value 0.
+        MatU W = U_;
+        if (rank_ < N1) {
+            const Eigen::HouseholderQR<MatU> qr(U_);
+            const MatU Q = qr.householderQ();
+            W.rightCols(N1 - rank_) = Q.rightCols(N1 - rank_);
+        }
+        const TlsSolution<N> sol = tls_solution<N>(W, s_, t_, cfg.rtls_eps);
+        if (info) info->sigma_min_multiplicity = sol.multiplicity;
+        if (sol.status) return sol.status;
+        out = sol.phi;
+        return 0;
+    }
+
+private:
+    // Eq. (24): SVD of the first 2-3 blocks (zero-padded to 18 columns,
+    // which adds zero singular values and changes nothing else).
+    void initial_svd() {
+        const Eigen::JacobiSVD<Eigen::Matrix<Real, N1, kMaxInit>> svd(init_, Eigen::ComputeFullU);
+        const auto sv = svd.singularValues();
+        const int n = static_cast<int>(sv.size());
+        const Real tol = rank_tol(sv(0));
+        rank_ = 0;
+        while (rank_ < n && sv(rank_) > tol) ++rank_;
+        U_.setZero();
+        s_.setZero();
+        U_.leftCols(rank_) = svd.matrixU().leftCols(rank_);
+        s_.head(rank_) = sv.head(rank_);
+    }
+
+    Real rank_tol(Real scale) const { return cfg.rtls_eps * Real(N1) * scale; }
+
+    // Eqs. (25)-(35) for one block.
+    void brand_update(const Block &Nk) {
+        Block L = U_.transpose() * Nk;  // eq. (27); rows >= r are 0
+        MatU basis = U_;                // [U_k J_k], eq. (34)
+        MatZ Z = MatZ::Zero();          // eq. (29), zero-padded
+        int p = 0;
+        if (rank_ < N1) {
+            // Eq. (28): the part of N_k outside span(U), projected twice
+            // (classical Gram-Schmidt with re-orthogonalisation).
+            Block H = Nk - U_ * L;
+            const Block L2 = U_.transpose() * H;
+            L += L2;
+            H -= U_ * L2;
+            // Eq. (31) asks whether the volume of H orthogonal to U is zero.
+            // A rank-revealing QR answers it column by column: the leading p
+            // columns with |G_ii| above the tolerance have non-zero volume
+            // and extend U (eqs. 34-35); p = 0 is the paper's v < eps branch
+            // (eqs. 32-33). Brand (2002) keeps exactly this numerical rank.
+            const Eigen::ColPivHouseholderQR<Block> qr(H);
+            const auto &R = qr.matrixQR();
+            const Real tol = rank_tol(std::max(s_(0), Nk.norm()));
+            const int pmax = std::min(LOADID_NROWS, N1 - rank_);
+            while (p < pmax && std::abs(R(p, p)) > tol) ++p;
+            if (p > 0) {
+                const MatU Q = qr.householderQ();
+                basis.middleCols(rank_, p) = Q.leftCols(p);
+                const auto &perm = qr.colsPermutation().indices();
+                for (int j = 0; j < LOADID_NROWS; ++j)
+                    for (int i = 0; i < p; ++i)
+                        Z(rank_ + i, N1 + perm(j)) = (i <= j) ? R(i, j) : Real(0);  // G_k
+            }
+        }
+        Z.topLeftCorner(N1, N1).diagonal() = s_;           // S_k
+        Z.template rightCols<LOADID_NROWS>().topRows(rank_) = L.topRows(rank_);  // L_k
+        // Eq. (30): only U' and S' are needed.
+        const Eigen::JacobiSVD<MatZ> svd(Z, Eigen::ComputeFullU);
+        rank_ += p;
+        U_.noalias() = basis * svd.matrixU();  // eqs. (32) / (34)
+        s_ = svd.singularValues();             // eqs. (33) / (35)
+        if (rank_ < N1) {
+            U_.rightCols(N1 - rank_).setZero();
+            s_.tail(N1 - rank_).setZero();
+        }
+    }
+
+    // Brand's re-orthogonalisation, when ||U^T U - I|| drifts past the bound.
+    void check_orthogonality() {
+        ortho_error_ = orthogonality_error();
+        if (!(cfg.rtls_ortho_tol > 0) || ortho_error_ <= cfg.rtls_ortho_tol) return;
+        const Eigen::HouseholderQR<MatU> qr(U_);
+        const MatU Q = qr.householderQ();
+        const auto &R = qr.matrixQR();
+        for (int j = 0; j < rank_; ++j) U_.col(j) = (R(j, j) < 0 ? Real(-1) : Real(1)) * Q.col(j);
+        ++reorth_;
+        ortho_error_ = orthogonality_error();
+    }
+
+    Real orthogonality_error() const {
+        MatU E = U_.transpose() * U_;
+        E.diagonal().head(rank_).array() -= Real(1);
+        return E.norm();
+    }
+
+    const Vec6 d_;
+    const Vec<N1> t_;
+    Excitation<N> excitation_;
+    MatU U_;
+    Vec<N1> s_;
+    Eigen::Matrix<Real, N1, kMaxInit> init_;
+    int rank_ = 0;
+    int init_count_ = 0;
+    int64_t samples_ = 0;
+    int reorth_ = 0;
+    Real ortho_error_ = 0;
+};
+
+}  // namespace loadid
