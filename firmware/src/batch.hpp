@@ -13,6 +13,7 @@
 #include "estimator_base.hpp"
 #include "excitation.hpp"
 #include "givens_qr.hpp"
+#include "linalg.hpp"
 #include "tls_solution.hpp"
 
 namespace loadid {
@@ -25,7 +26,7 @@ class Batch final : public loadid_est {
 public:
     explicit Batch(const loadid_est_config_t &c)
         : loadid_est(c), d_(row_weights<N>(c)), t_(col_weights<N>(c)),
-          excitation_(d_, t_.template head<N>()) {}
+          excitation_(d_, t_) {}
 
     // The one allocation; false when out of memory.
     bool allocate() {
@@ -47,21 +48,17 @@ public:
             for (int j = 0; j < N; ++j) dst[i * N1 + j] = a[i * N + j];
             dst[i * N1 + N] = y[i];
         }
-        excitation_.add(Regressor<N>(ConstRegressorMap<N>(a)));
+        excitation_.add(Regressor<N>(ConstRegressorMap<N>(a)), Eigen::Map<const Vec6>(y));
         ++samples_;
         return 0;
     }
 
     int estimate(Real *phi, loadid_est_info_t *info) const override {
-        const Real kappa = excitation_.condition();
-        if (info) {
-            *info = loadid_est_info_t{};
-            info->samples = samples_;
-            info->condition_number = kappa;
-        }
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
-        if (samples_ < 2 || !(kappa <= cfg.max_condition)) return LOADID_E_NOT_EXCITED;
+        const int gate = excitation_gate(excitation_, cfg, samples_, info);
+        if (gate) return gate;
+        if (samples_ < 2) return LOADID_E_NOT_EXCITED;
 
         MatR R = MatR::Zero();  // QR of all rows D [A y], from scratch
         for (int64_t k = 0; k < samples_ * LOADID_NROWS; ++k) {
@@ -77,11 +74,16 @@ public:
             out = sol;
             return 0;
         }
-        const MatR RT = R * t_.asDiagonal();
-        const Eigen::JacobiSVD<MatR> svd(RT, Eigen::ComputeFullV);
-        const TlsSolution<N> sol = tls_solution<N>(svd.matrixV(), svd.singularValues(), t_, cfg.rtls_eps);
+        // The right singular vectors of R T are the left ones of (R T)^T.
+        const linalg::Work RTt = (R * t_.asDiagonal()).transpose();
+        linalg::Square Vb;
+        linalg::Values svb;
+        linalg::svd_left(RTt, Vb, svb);
+        const MatR V = Vb;
+        const Vec<N1> sv = svb;
+        const TlsSolution<N> sol = tls_solution<N>(V, sv, t_, cfg.rtls_eps);
         if (info) {
-            info->sigma_min = svd.singularValues()(N);
+            info->sigma_min = sv(N);
             info->sigma_min_multiplicity = sol.multiplicity;
         }
         if (sol.status) return sol.status;

@@ -10,8 +10,11 @@ namespace loadid {
 
 using Real = loadid_real_t;
 
-template <int R, int C>
-using Mat = Eigen::Matrix<Real, R, C, (C == 1 && R != 1) ? Eigen::ColMajor : Eigen::RowMajor>;
+// A matrix whose size is set at run time but bounded at compile time: its
+// storage is inline (no heap), and Eigen does not unroll its loops, which
+// keeps the SVD and QR of the larger matrices quick to compile.
+template <int MaxR, int MaxC>
+using BoundedMat = Eigen::Matrix<Real, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, MaxR, MaxC>;
 template <int R>
 using Vec = Eigen::Matrix<Real, R, 1>;
 using Vec3 = Vec<3>;

@@ -7,16 +7,14 @@
 #include <cstring>
 #include <new>
 
-#include "batch.hpp"
+#include "estimator_factory.hpp"
 #include "finite.hpp"
-#include "rls.hpp"
-#include "rtls.hpp"
 
 using namespace loadid;
 
 namespace {
 
-bool positive_finite(Real v) { return std::isfinite(v) && v > 0; }
+bool positive_finite(loadid_real_t v) { return std::isfinite(v) && v > 0; }
 
 bool valid_method(int m) { return m >= LOADID_METHOD_RLS && m <= LOADID_METHOD_TLS_BATCH; }
 
@@ -33,6 +31,7 @@ bool valid_config(const loadid_est_config_t &c) {
     if (!positive_finite(c.rtls_eps) || !std::isfinite(c.rtls_ortho_tol) || c.rtls_ortho_tol < 0)
         return false;
     if (c.batch_capacity < 1) return false;
+    if (!(c.max_noise_ratio > 0 && c.max_noise_ratio <= 1)) return false;
     return positive_finite(c.max_condition);
 }
 
@@ -40,17 +39,10 @@ template <int N>
 loadid_est *make(const loadid_est_config_t &c) {
     switch (c.method) {
         case LOADID_METHOD_RLS:
-        case LOADID_METHOD_RIV: return new (std::nothrow) RecursiveLs<N>(c);
-        case LOADID_METHOD_RTLS: return new (std::nothrow) Rtls<N>(c);
+        case LOADID_METHOD_RIV: return make_recursive_ls<N>(c);
+        case LOADID_METHOD_RTLS: return make_rtls<N>(c);
         case LOADID_METHOD_LS_BATCH:
-        case LOADID_METHOD_TLS_BATCH: {
-            auto *b = new (std::nothrow) Batch<N>(c);
-            if (b && !b->allocate()) {
-                delete b;
-                return nullptr;
-            }
-            return b;
-        }
+        case LOADID_METHOD_TLS_BATCH: return make_batch<N>(c);
     }
     return nullptr;
 }
@@ -72,9 +64,10 @@ extern "C" int loadid_est_config_default(loadid_method_t method, int n_params,
     cfg->forgetting = 1;
     cfg->rtls_init_samples = 2;
     cfg->rtls_eps = 64 * kEps;
-    cfg->rtls_ortho_tol = 1000 * kEps;
+    cfg->rtls_ortho_tol = sizeof(Real) == sizeof(float) ? Real(1e-4) : Real(1e-10);
     cfg->batch_capacity = 4000;
     cfg->max_condition = sizeof(Real) == sizeof(float) ? Real(1e3) : Real(1e6);
+    cfg->max_noise_ratio = Real(0.95);
     return 0;
 }
 

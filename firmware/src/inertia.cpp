@@ -53,17 +53,20 @@ extern "C" int loadid_phi_to_physical(const loadid_real_t phi[10], loadid_physic
     if (!(p(0) > rel * scale)) out->violations |= LOADID_PHYS_INERTIA_NOT_PD;
     if (p(0) + p(1) < p(2) - rel * scale) out->violations |= LOADID_PHYS_TRIANGLE;
 
-    // Pseudo-inertia J = [Sigma h; h^T m], Sigma = 0.5 tr(I_S) E - I_S:
+    // Pseudo-inertia J = [Sigma h; h^T m], Sigma = 0.5 tr(I_S) E - I_S, is
     // positive definite exactly when phi belongs to a body with positive
-    // density (Wensing, Kim, Slotine 2017).
-    Eigen::Matrix<Real, 4, 4> J;
-    J.topLeftCorner<3, 3>() = Real(0.5) * Is.trace() * Mat3::Identity() - Is;
-    J.topRightCorner<3, 1>() = h;
-    J.bottomLeftCorner<1, 3>() = h.transpose();
-    J(3, 3) = m;
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Real, 4, 4>> ej(J, Eigen::EigenvaluesOnly);
-    const Real jscale = std::max(ej.eigenvalues().cwiseAbs().maxCoeff(), std::numeric_limits<Real>::min());
-    if (!(ej.eigenvalues()(0) > rel * jscale)) out->violations |= LOADID_PHYS_PSEUDO_INERTIA_NOT_PD;
+    // density (Wensing, Kim, Slotine 2017). J mixes kg and kg m^2, so its
+    // eigenvalues have no common scale; for m > 0, J is positive definite
+    // exactly when its Schur complement Sigma - h h^T / m = 0.5 tr(I_C) E - I_C
+    // (the second moment of mass about the COM, in kg m^2) is, which is
+    // tested against the principal moments' scale.
+    if (m > 0) {
+        const Mat3 Sc = Real(0.5) * Ic.trace() * Mat3::Identity() - Ic;
+        const Eigen::SelfAdjointEigenSolver<Mat3> es2(Sc, Eigen::EigenvaluesOnly);
+        if (!(es2.eigenvalues()(0) > rel * scale)) out->violations |= LOADID_PHYS_PSEUDO_INERTIA_NOT_PD;
+    } else {
+        out->violations |= LOADID_PHYS_PSEUDO_INERTIA_NOT_PD;
+    }
     return 0;
 }
 

@@ -1,8 +1,18 @@
 // Recursive least squares, eqs. (17)-(19), and recursive instrumental
-// variables, eqs. (20)-(22). They differ only in the matrix on the left of
-// the gain: A_k itself (RLS) or the instruments C_k (RIV), so one template
-// serves both. Sigma_0 = p0 I and phi_0 = 0 make the recursion equal to
-// least squares with a vanishing ridge p0^-1.
+// variables, eqs. (20)-(22). Sigma_0 = p0 I and phi_0 = 0 make the recursion
+// equal to least squares with a vanishing ridge 1 / p0.
+//
+// RLS runs eqs. (17)-(19) in Bierman's UD-factorised form: Sigma = U D U^T
+// (U unit upper triangular, D diagonal) and, Lambda being diagonal, one
+// sample's six rows as six scalar updates. Gain and estimate are those of
+// eqs. (17)-(19) in exact arithmetic, but Sigma stays positive definite and
+// keeps its small elements when it falls from p0 by many orders (the plain
+// Sigma - K A Sigma loses eps * p0 to rounding; Bierman 1977, ch. V).
+// RIV's Sigma is not symmetric, so UD does not apply; it keeps
+// M = Sigma^-1 = lambda M + C^T Lambda^-1 B and b = lambda b + C^T Lambda^-1 y
+// (Sigma_0^-1 = I / p0) and solves M phi = b by LU each sample: the value
+// eqs. (20)-(22) reach through the matrix inversion lemma, without their
+// cancellation (which costs 1e-3 of phi after 100 samples at p0 = 1e6).
 #pragma once
 
 #include "estimator_base.hpp"
@@ -16,14 +26,17 @@ public:
     explicit RecursiveLs(const loadid_est_config_t &c)
         : loadid_est(c),
           instrumental_(c.method == LOADID_METHOD_RIV),
-          excitation_(row_weights<N>(c), col_weights<N>(c).template head<N>()) {
+          excitation_(row_weights<N>(c), col_weights<N>(c)) {
         for (int i = 0; i < 6; ++i) lambda_(i) = c.row_sigma[i] * c.row_sigma[i];
         reset();
     }
 
     void reset() override {
         phi_.setZero();
-        P_ = Eigen::Matrix<Real, N, N>::Identity() * cfg.p0;
+        M_ = Eigen::Matrix<Real, N, N>::Identity() / cfg.p0;  // RIV: Sigma^-1
+        b_.setZero();
+        U_.setIdentity();                                     // RLS: Sigma = U D U^T
+        D_.setConstant(cfg.p0);
         excitation_.reset();
         samples_ = 0;
     }
@@ -31,51 +44,73 @@ public:
     int update(const Real *a, const Real *c, const Real *y) override {
         const ConstRegressorMap<N> B(a);  // data matrix (A_k, or B_k of RIV)
         const Eigen::Map<const Vec6> yk(y);
-        const Real lam = cfg.forgetting;
-        // P B^T and P C^T: C_k = A_k for RLS (eq. 17), instruments for RIV (eq. 20).
-        const Eigen::Matrix<Real, N, 6> PCt = instrumental_
-            ? Eigen::Matrix<Real, N, 6>(P_ * ConstRegressorMap<N>(c).transpose())
-            : Eigen::Matrix<Real, N, 6>(P_ * B.transpose());
-        Eigen::Matrix<Real, 6, 6> S = B * PCt;
-        S.diagonal() += lam * lambda_;
-        Eigen::Matrix<Real, N, 6> K;
-        if (instrumental_) {
-            // K = Sigma C^T [B Sigma C^T + Lambda]^-1, eq. (20); S is not symmetric.
-            K = S.transpose().partialPivLu().solve(PCt.transpose()).transpose();
-        } else {
-            // K = Sigma A^T [A Sigma A^T + Lambda]^-1, eq. (17); S is SPD.
-            K = S.llt().solve(PCt.transpose()).transpose();
-        }
-        phi_ += K * (yk - B * phi_);                       // eqs. (19), (22)
-        const Eigen::Matrix<Real, N, N> KBP = K * (B * P_);
-        P_ = (P_ - KBP) / lam;                              // eqs. (18), (21)
-        if (!instrumental_) P_ = Real(0.5) * (P_ + P_.transpose()).eval();  // keep RLS's P symmetric
-        excitation_.add(Regressor<N>(B), lam);
+        if (instrumental_)
+            update_riv(B, ConstRegressorMap<N>(c), yk);
+        else
+            update_rls_ud(B, yk);
+        excitation_.add(Regressor<N>(B), yk, cfg.forgetting);
         ++samples_;
         return 0;
     }
 
     int estimate(Real *phi, loadid_est_info_t *info) const override {
-        const Real kappa = excitation_.condition();
-        if (info) {
-            *info = loadid_est_info_t{};
-            info->samples = samples_;
-            info->condition_number = kappa;
-        }
         Eigen::Map<Vec<N>> out(phi);
-        if (!(kappa <= cfg.max_condition) || !phi_.allFinite()) {
-            out.setZero();
-            return LOADID_E_NOT_EXCITED;
-        }
+        out.setZero();
+        const int rc = excitation_gate(excitation_, cfg, samples_, info);
+        if (rc) return rc;
+        if (!phi_.allFinite()) return LOADID_E_NOT_EXCITED;
         out = phi_;
         return 0;
     }
 
 private:
+    // Eqs. (17)-(19), one row h (variance r) at a time, Bierman's update.
+    void update_rls_ud(const ConstRegressorMap<N> &A, const Vec6 &y) {
+        // Forgetting: Sigma / lambda before the update (eq. 17 with lambda Lambda).
+        D_ /= cfg.forgetting;
+        for (int row = 0; row < LOADID_NROWS; ++row) {
+            const Vec<N> h = A.row(row).transpose();
+            const Vec<N> f = U_.transpose() * h;
+            const Vec<N> v = D_.cwiseProduct(f);
+            Vec<N> b;
+            Real alpha = lambda_(row) + v(0) * f(0);
+            D_(0) *= lambda_(row) / alpha;
+            b(0) = v(0);
+            for (int j = 1; j < N; ++j) {
+                const Real alpha_prev = alpha;
+                alpha += v(j) * f(j);
+                const Real p = -f(j) / alpha_prev;
+                D_(j) *= alpha_prev / alpha;
+                b(j) = v(j);
+                for (int i = 0; i < j; ++i) {
+                    const Real u = U_(i, j);
+                    U_(i, j) = u + b(i) * p;
+                    b(i) += u * v(j);
+                }
+            }
+            // K = b / alpha is the column of eq. (17) for this row; eq. (19).
+            phi_ += (b / alpha) * (y(row) - h.dot(phi_));
+        }
+    }
+
+    // Eqs. (20)-(22) in information form.
+    void update_riv(const ConstRegressorMap<N> &B, const ConstRegressorMap<N> &C, const Vec6 &y) {
+        const Real lam = cfg.forgetting;
+        const Eigen::Matrix<Real, N, 6> CtLi = C.transpose() * lambda_.cwiseInverse().asDiagonal();
+        M_ = lam * M_;
+        M_.noalias() += CtLi * B;
+        b_ = lam * b_;
+        b_.noalias() += CtLi * y;
+        phi_ = M_.partialPivLu().solve(b_);
+    }
+
     const bool instrumental_;
     Vec6 lambda_;
     Vec<N> phi_;
-    Eigen::Matrix<Real, N, N> P_;
+    Eigen::Matrix<Real, N, N> M_;
+    Vec<N> b_;
+    Eigen::Matrix<Real, N, N> U_;
+    Vec<N> D_;
     Excitation<N> excitation_;
     int64_t samples_ = 0;
 };

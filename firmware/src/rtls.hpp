@@ -12,6 +12,7 @@
 
 #include "estimator_base.hpp"
 #include "excitation.hpp"
+#include "linalg.hpp"
 #include "tls_solution.hpp"
 
 namespace loadid {
@@ -22,12 +23,11 @@ class Rtls final : public loadid_est {
     static constexpr int kMaxInit = 3 * LOADID_NROWS;
     using MatU = Eigen::Matrix<Real, N1, N1>;
     using Block = Eigen::Matrix<Real, N1, LOADID_NROWS>;
-    using MatZ = Eigen::Matrix<Real, N1, N1 + LOADID_NROWS>;
 
 public:
     explicit Rtls(const loadid_est_config_t &c)
         : loadid_est(c), d_(row_weights<N>(c)), t_(col_weights<N>(c)),
-          excitation_(d_, t_.template head<N>()) { reset(); }
+          excitation_(d_, t_) { reset(); }
 
     void reset() override {
         U_.setZero();
@@ -47,7 +47,7 @@ public:
         Ay.col(N) = Eigen::Map<const Vec6>(y);
         // N_k = [D [A_k y_k] T]^T, eq. (26).
         const Block Nk = (d_.asDiagonal() * Ay * t_.asDiagonal()).transpose();
-        excitation_.add(Regressor<N>(A));
+        excitation_.add(Regressor<N>(A), Eigen::Map<const Vec6>(y));
         ++samples_;
         if (init_count_ < cfg.rtls_init_samples) {
             init_.template block<N1, LOADID_NROWS>(0, LOADID_NROWS * init_count_) = Nk;
@@ -60,25 +60,23 @@ public:
     }
 
     int estimate(Real *phi, loadid_est_info_t *info) const override {
-        const Real kappa = excitation_.condition();
+        Eigen::Map<Vec<N>> out(phi);
+        out.setZero();
+        const int gate = excitation_gate(excitation_, cfg, samples_, info);
         if (info) {
-            *info = loadid_est_info_t{};
-            info->samples = samples_;
-            info->condition_number = kappa;
             info->sigma_min = rank_ == N1 ? s_(N) : Real(0);
             info->reorthogonalisations = reorth_;
             info->orthogonality_error = ortho_error_;
         }
-        Eigen::Map<Vec<N>> out(phi);
-        out.setZero();
-        if (init_count_ < cfg.rtls_init_samples || !(kappa <= cfg.max_condition))
-            return LOADID_E_NOT_EXCITED;
+        if (gate) return gate;
+        if (init_count_ < cfg.rtls_init_samples) return LOADID_E_NOT_EXCITED;
         // The directions M has not reached (rank r < N+1) are the orthogonal
         // complement of U, with singular value 0.
         MatU W = U_;
         if (rank_ < N1) {
-            const Eigen::HouseholderQR<MatU> qr(U_);
-            const MatU Q = qr.householderQ();
+            linalg::Square Q;
+            linalg::Values rd;
+            linalg::householder_q(linalg::Square(U_), Q, rd);
             W.rightCols(N1 - rank_) = Q.rightCols(N1 - rank_);
         }
         const TlsSolution<N> sol = tls_solution<N>(W, s_, t_, cfg.rtls_eps);
@@ -92,15 +90,20 @@ private:
     // Eq. (24): SVD of the first 2-3 blocks (zero-padded to 18 columns,
     // which adds zero singular values and changes nothing else).
     void initial_svd() {
-        const Eigen::JacobiSVD<Eigen::Matrix<Real, N1, kMaxInit>> svd(init_, Eigen::ComputeFullU);
-        const auto sv = svd.singularValues();
-        const int n = static_cast<int>(sv.size());
+        const int cols = LOADID_NROWS * cfg.rtls_init_samples;
+        // svd_left wants rows <= columns: zero columns add only zero
+        // singular values.
+        linalg::Work M = linalg::Work::Zero(N1, std::max(N1, cols));
+        M.leftCols(cols) = init_.leftCols(cols);
+        linalg::Square Um;
+        linalg::Values sv;
+        linalg::svd_left(M, Um, sv);
         const Real tol = rank_tol(sv(0));
         rank_ = 0;
-        while (rank_ < n && sv(rank_) > tol) ++rank_;
+        while (rank_ < N1 && sv(rank_) > tol) ++rank_;
         U_.setZero();
         s_.setZero();
-        U_.leftCols(rank_) = svd.matrixU().leftCols(rank_);
+        U_.leftCols(rank_) = Um.leftCols(rank_);
         s_.head(rank_) = sv.head(rank_);
     }
 
@@ -110,7 +113,7 @@ private:
     void brand_update(const Block &Nk) {
         Block L = U_.transpose() * Nk;  // eq. (27); rows >= r are 0
         MatU basis = U_;                // [U_k J_k], eq. (34)
-        MatZ Z = MatZ::Zero();          // eq. (29), zero-padded
+        linalg::Work Z = linalg::Work::Zero(N1, N1 + LOADID_NROWS);  // eq. (29), zero-padded
         int p = 0;
         if (rank_ < N1) {
             // Eq. (28): the part of N_k outside span(U), projected twice
@@ -124,27 +127,28 @@ private:
             // columns with |G_ii| above the tolerance have non-zero volume
             // and extend U (eqs. 34-35); p = 0 is the paper's v < eps branch
             // (eqs. 32-33). Brand (2002) keeps exactly this numerical rank.
-            const Eigen::ColPivHouseholderQR<Block> qr(H);
-            const auto &R = qr.matrixQR();
+            linalg::Square Q;
+            linalg::Tall R;
+            Eigen::Matrix<int, LOADID_NROWS, 1> perm;
+            linalg::colpiv_qr(linalg::Tall(H), Q, R, perm);
             const Real tol = rank_tol(std::max(s_(0), Nk.norm()));
             const int pmax = std::min(LOADID_NROWS, N1 - rank_);
             while (p < pmax && std::abs(R(p, p)) > tol) ++p;
             if (p > 0) {
-                const MatU Q = qr.householderQ();
                 basis.middleCols(rank_, p) = Q.leftCols(p);
-                const auto &perm = qr.colsPermutation().indices();
                 for (int j = 0; j < LOADID_NROWS; ++j)
-                    for (int i = 0; i < p; ++i)
-                        Z(rank_ + i, N1 + perm(j)) = (i <= j) ? R(i, j) : Real(0);  // G_k
+                    for (int i = 0; i < p; ++i) Z(rank_ + i, N1 + perm(j)) = R(i, j);  // G_k = R P^T
             }
         }
         Z.topLeftCorner(N1, N1).diagonal() = s_;           // S_k
         Z.template rightCols<LOADID_NROWS>().topRows(rank_) = L.topRows(rank_);  // L_k
         // Eq. (30): only U' and S' are needed.
-        const Eigen::JacobiSVD<MatZ> svd(Z, Eigen::ComputeFullU);
+        linalg::Square Uz;
+        linalg::Values sz;
+        linalg::svd_left(Z, Uz, sz);
         rank_ += p;
-        U_.noalias() = basis * svd.matrixU();  // eqs. (32) / (34)
-        s_ = svd.singularValues();             // eqs. (33) / (35)
+        U_.noalias() = basis * Uz;  // eqs. (32) / (34)
+        s_ = sz;                    // eqs. (33) / (35)
         if (rank_ < N1) {
             U_.rightCols(N1 - rank_).setZero();
             s_.tail(N1 - rank_).setZero();
@@ -155,10 +159,10 @@ private:
     void check_orthogonality() {
         ortho_error_ = orthogonality_error();
         if (!(cfg.rtls_ortho_tol > 0) || ortho_error_ <= cfg.rtls_ortho_tol) return;
-        const Eigen::HouseholderQR<MatU> qr(U_);
-        const MatU Q = qr.householderQ();
-        const auto &R = qr.matrixQR();
-        for (int j = 0; j < rank_; ++j) U_.col(j) = (R(j, j) < 0 ? Real(-1) : Real(1)) * Q.col(j);
+        linalg::Square Q;
+        linalg::Values rd;
+        linalg::householder_q(linalg::Square(U_), Q, rd);
+        for (int j = 0; j < rank_; ++j) U_.col(j) = (rd(j) < 0 ? Real(-1) : Real(1)) * Q.col(j);
         ++reorth_;
         ortho_error_ = orthogonality_error();
     }

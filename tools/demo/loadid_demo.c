@@ -199,8 +199,8 @@ int main(int argc, char **argv) {
             est_phi[m][i] = load[i];
             mean_err[m] += err[i] / 10.0;
         }
-        printf("%-9s kappa %.3g  sigma_min %.3g  physically consistent: %s\n", loadid_method_name(methods[m]),
-               info.condition_number, info.sigma_min, phys.violations ? "no" : "yes");
+        printf("%-9s kappa %.3g  noise ratio %.3f  sigma_min %.3g  physically consistent: %s\n", loadid_method_name(methods[m]),
+               info.condition_number, info.noise_ratio, info.sigma_min, phys.violations ? "no" : "yes");
         if (n_params == LOADID_NPHI_OFFSET)
             printf("          offset estimate [%.3f %.3f %.3f N, %.4f %.4f %.4f Nm] (true %.3f %.3f %.3f, %.4f %.4f %.4f)\n",
                    phi[10], phi[11], phi[12], phi[13], phi[14], phi[15], noise.offset[0], noise.offset[1],

@@ -62,15 +62,24 @@ typedef struct {
      * machine epsilon of loadid_real_t. Default 64 eps. */
     loadid_real_t rtls_eps;
     /* RTLS: re-orthogonalise U when ||U^T U - I||_F exceeds this; 0 turns
-     * re-orthogonalisation off. Default 1e3 eps. */
+     * re-orthogonalisation off. Default 1e-10 (double), 1e-4 (float); U
+     * drifts by about 16 eps per update. */
     loadid_real_t rtls_ortho_tol;
     /* Batch methods: how many samples the row store holds. Default 4000
      * (4 s at 1 kHz); an update beyond it returns LOADID_E_FULL. */
     int batch_capacity;
     /* Excitation: estimate() reports LOADID_E_NOT_EXCITED while the
      * condition number of the weighted data matrix D A T exceeds this [-].
-     * Default 1e6 (double) / 1e4 (float). */
+     * Default 1e6 (double) / 1e3 (float). */
     loadid_real_t max_condition;
+    /* Excitation: estimate() also reports LOADID_E_NOT_EXCITED while the
+     * noise ratio sigma_{n+1} / sigma_n of the weighted D [A y] T exceeds
+     * this [-], or exceeds 1 - 2 sqrt((n+1) / 6k) after k samples (the
+     * spread of the singular values of pure noise, Marchenko-Pastur): no
+     * direction of the parameters stands out of the noise. A still pose
+     * with noisy accelerometer signals is well conditioned but not
+     * excited. In (0, 1]; 1 turns the check off. Default 0.95. */
+    loadid_real_t max_noise_ratio;
 } loadid_est_config_t;
 
 /* What estimate() reports beside phi. */
@@ -78,6 +87,8 @@ typedef struct {
     int64_t samples;               /* samples used so far */
     loadid_real_t condition_number;/* kappa of D A_Xi T (columns of A only);
                                       +Inf when rank-deficient */
+    loadid_real_t noise_ratio;     /* sigma_{n+1} / sigma_n of D [A y]_Xi T,
+                                      in [0, 1]; 1 with no data */
     loadid_real_t sigma_min;       /* RTLS, TLS_BATCH: smallest singular value
                                       of D [A y] T; 0 for the others */
     int sigma_min_multiplicity;    /* RTLS, TLS_BATCH: p of the Householder
@@ -110,7 +121,8 @@ int loadid_est_weights_from_noise(loadid_est_config_t *cfg,
 /* Allocates and initialises an estimator (the only allocation it ever
  * makes). Returns 0 and sets *out, -EINVAL for a NULL pointer or an invalid
  * configuration (a weight or sigma not finite and > 0, forgetting outside
- * (0, 1], init samples not 2 or 3, capacity < 1), or -ENOMEM. */
+ * (0, 1], init samples not 2 or 3, capacity < 1, max_noise_ratio outside
+ * (0, 1]), or -ENOMEM. */
 int loadid_est_create(const loadid_est_config_t *cfg, loadid_est_t **out);
 
 /* Frees it; NULL is allowed. */
@@ -130,9 +142,10 @@ int loadid_est_update(loadid_est_t *est, const loadid_real_t *A,
 
 /* The current estimate: phi (n_params values; eq. 5 then, for 16, the
  * offset) and info (may be NULL).
- * Returns 0; -EINVAL; LOADID_E_NOT_EXCITED when too few samples or the
+ * Returns 0; -EINVAL; LOADID_E_NOT_EXCITED when too few samples, the
  * weighted data matrix is rank-deficient or worse conditioned than
- * max_condition (phi is then all zeros, info is filled);
+ * max_condition, or its noise ratio exceeds max_noise_ratio (phi is then
+ * all zeros, info is filled);
  * LOADID_E_NO_SOLUTION (TLS only: eq. 36 has no solution; phi zeros).
  * phi never holds NaN or Inf. */
 int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi,

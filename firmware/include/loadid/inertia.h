@@ -31,9 +31,11 @@ typedef struct {
 /* Mass, COM, inertia about the COM by the parallel-axis theorem
  * I_C = I_S - m (c.c E - c c^T), principal moments, and the consistency
  * checks: positive mass, positive-definite inertia about the COM, triangle
- * inequalities of the principal moments (with a relative tolerance of
- * 1e-9 double, 1e-5 float), positive-definite pseudo-inertia
- * J = [0.5 tr(I_S) E - I_S, m c; (m c)^T, m].
+ * inequalities of the principal moments, positive-definite pseudo-inertia
+ * J = [0.5 tr(I_S) E - I_S, m c; (m c)^T, m] (tested through its Schur
+ * complement 0.5 tr(I_C) E - I_C, in kg m^2). Each test has a relative
+ * tolerance of 1e-9 (double) or 1e-5 (float) of the largest principal
+ * moment.
  * Returns 0 (also when phi is inconsistent: see violations), -EINVAL, or
  * LOADID_E_NONFINITE. */
 int loadid_phi_to_physical(const loadid_real_t phi[10], loadid_physical_t *out);
