@@ -1,0 +1,311 @@
+"""Shared ctypes binding of the loadid estimation core for the Python cross-checks.
+
+The library under test is named by the environment variable LOADID_CORE_LIB
+(tests/CMakeLists.txt sets it to the shared library libloadid_core.so, built
+with loadid_real_t = double). Everything here mirrors the C API in
+firmware/include/loadid/{types,regressor,estimator,inertia}.h:
+
+* loadid_real_t is double (checked through loadid_scalar_is_float());
+* enums (loadid_method_t, loadid_error) are C ints;
+* matrices are row-major, so a C-contiguous float64 numpy array of shape
+  (6, n) is exactly the A[r * ncols + c] layout the headers describe.
+
+Helpers for the tests:
+
+* ``regressor(spec, w, alpha)``          -> 6x10 numpy array (eq. 6)
+* ``add_zeroing(A, g_init)``             -> A + [A~(g_init) 0] (eqs. 7-9)
+* ``with_offset(A)``                     -> 6x16 [A E6]
+* ``config_default(method, n_params)``   -> a filled LoadidEstConfig
+* ``weights_from_noise(cfg, ...)``       -> fills row_sigma / col_weight
+* ``Estimator(cfg)``                     -> create / update / estimate / reset / destroy
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import pathlib
+
+import numpy as np
+import pytest
+
+# --------------------------------------------------------------------------
+# Constants of types.h / estimator.h
+# --------------------------------------------------------------------------
+LOADID_NROWS = 6
+LOADID_NPHI = 10
+LOADID_NPHI_OFFSET = 16
+LOADID_MAX_PARAMS = 16
+
+LOADID_E_NONFINITE = -1001
+LOADID_E_NOT_EXCITED = -1002
+LOADID_E_NO_SOLUTION = -1003
+LOADID_E_FULL = -1004
+
+METHOD_RLS = 1
+METHOD_RIV = 2
+METHOD_RTLS = 3
+METHOD_LS_BATCH = 4
+METHOD_TLS_BATCH = 5
+METHOD_NAMES = {
+    METHOD_RLS: "RLS",
+    METHOD_RIV: "RIV",
+    METHOD_RTLS: "RTLS",
+    METHOD_LS_BATCH: "LS_BATCH",
+    METHOD_TLS_BATCH: "TLS_BATCH",
+}
+
+REPO_ROOT = pathlib.Path(__file__).resolve().parents[2]
+INCLUDE_DIR = REPO_ROOT / "firmware" / "include"
+
+real_t = ctypes.c_double  # loadid_real_t in the double build
+real_p = ctypes.POINTER(real_t)
+
+
+# --------------------------------------------------------------------------
+# Structs, field by field in the order of estimator.h
+# --------------------------------------------------------------------------
+class LoadidEstConfig(ctypes.Structure):
+    """loadid_est_config_t."""
+
+    _fields_ = [
+        ("method", ctypes.c_int),                            # loadid_method_t (enum)
+        ("n_params", ctypes.c_int),                          # 10 or 16
+        ("row_sigma", real_t * LOADID_NROWS),                # [N N N Nm Nm Nm]
+        ("col_weight", real_t * (LOADID_MAX_PARAMS + 1)),    # n_params + 1 used
+        ("p0", real_t),
+        ("forgetting", real_t),
+        ("rtls_init_samples", ctypes.c_int),
+        ("rtls_eps", real_t),
+        ("rtls_ortho_tol", real_t),
+        ("batch_capacity", ctypes.c_int),
+        ("max_condition", real_t),
+        ("max_noise_ratio", real_t),
+    ]
+
+
+class LoadidEstInfo(ctypes.Structure):
+    """loadid_est_info_t."""
+
+    _fields_ = [
+        ("samples", ctypes.c_int64),
+        ("condition_number", real_t),
+        ("noise_ratio", real_t),
+        ("sigma_min", real_t),
+        ("sigma_min_multiplicity", ctypes.c_int),
+        ("reorthogonalisations", ctypes.c_int),
+        ("orthogonality_error", real_t),
+    ]
+
+
+# --------------------------------------------------------------------------
+# Loading the library and declaring every function used
+# --------------------------------------------------------------------------
+def _load_library() -> ctypes.CDLL:
+    path = os.environ.get("LOADID_CORE_LIB")
+    if not path:
+        pytest.exit(
+            "LOADID_CORE_LIB is not set: point it at the double-scalar shared "
+            "library, e.g. LOADID_CORE_LIB=build/release/firmware/libloadid_core.so "
+            "(ctest sets it; build it with "
+            "`cmake --build build/release --target loadid_core_shared`)",
+            returncode=2,
+        )
+    if not os.path.isfile(path):
+        pytest.exit(f"LOADID_CORE_LIB={path!r} does not exist (build loadid_core_shared first)",
+                    returncode=2)
+    try:
+        lib = ctypes.CDLL(path)
+    except OSError as exc:  # pragma: no cover - depends on the machine
+        pytest.exit(f"LOADID_CORE_LIB={path!r} cannot be loaded: {exc}", returncode=2)
+
+    def decl(name, restype, argtypes):
+        fn = getattr(lib, name)
+        fn.restype = restype
+        fn.argtypes = argtypes
+
+    cfg_p = ctypes.POINTER(LoadidEstConfig)
+    info_p = ctypes.POINTER(LoadidEstInfo)
+
+    # types.h
+    decl("loadid_strerror", ctypes.c_char_p, [ctypes.c_int])
+    decl("loadid_scalar_is_float", ctypes.c_int, [])
+    # regressor.h
+    decl("loadid_regressor", ctypes.c_int, [real_p, real_p, real_p, real_p])
+    decl("loadid_regressor_add_zeroing", ctypes.c_int, [real_p, real_p])
+    decl("loadid_regressor_with_offset", ctypes.c_int, [real_p, real_p])
+    decl("loadid_regressor_apply", ctypes.c_int, [real_p, ctypes.c_int, real_p, real_p])
+    # estimator.h (loadid_est_t is opaque: a void pointer)
+    decl("loadid_est_config_default", ctypes.c_int, [ctypes.c_int, ctypes.c_int, cfg_p])
+    decl("loadid_est_weights_from_noise", ctypes.c_int,
+         [cfg_p, real_t, real_t, real_t, real_t, real_t, real_t])
+    decl("loadid_est_create", ctypes.c_int, [cfg_p, ctypes.POINTER(ctypes.c_void_p)])
+    decl("loadid_est_destroy", None, [ctypes.c_void_p])
+    decl("loadid_est_reset", ctypes.c_int, [ctypes.c_void_p])
+    decl("loadid_est_update", ctypes.c_int, [ctypes.c_void_p, real_p, real_p, real_p])
+    decl("loadid_est_estimate", ctypes.c_int, [ctypes.c_void_p, real_p, info_p])
+    decl("loadid_est_config", cfg_p, [ctypes.c_void_p])
+    decl("loadid_method_name", ctypes.c_char_p, [ctypes.c_int])
+    decl("loadid_method_from_name", ctypes.c_int, [ctypes.c_char_p])
+
+    if lib.loadid_scalar_is_float() != 0:
+        pytest.exit(f"{path} was built with float as loadid_real_t; these checks need the "
+                    "double build", returncode=2)
+    return lib
+
+
+LIB = _load_library()
+
+
+def strerror(code: int) -> str:
+    return LIB.loadid_strerror(code).decode()
+
+
+def _vec(x, n) -> np.ndarray:
+    """A fresh C-contiguous float64 copy of x with n elements."""
+    a = np.ascontiguousarray(np.asarray(x, dtype=np.float64).reshape(n))
+    return a
+
+
+def _ptr(a: np.ndarray):
+    assert a.dtype == np.float64 and a.flags["C_CONTIGUOUS"]
+    return a.ctypes.data_as(real_p)
+
+
+def check(rc: int, what: str) -> int:
+    if rc < 0:
+        raise AssertionError(f"{what} returned {rc} ({strerror(rc)})")
+    return rc
+
+
+# --------------------------------------------------------------------------
+# Regressor helpers
+# --------------------------------------------------------------------------
+def regressor(spec, w, alpha) -> np.ndarray:
+    """Eq. (6) from the library: 6x10, rows [f; tau], columns phi of eq. (5)."""
+    s, o, al = _vec(spec, 3), _vec(w, 3), _vec(alpha, 3)
+    A = np.zeros((6, 10))
+    check(LIB.loadid_regressor(_ptr(s), _ptr(o), _ptr(al), _ptr(A)), "loadid_regressor")
+    return A
+
+
+def add_zeroing(A, g_init) -> np.ndarray:
+    """A + [A~(g_init) 0_6x6] from the library (a new array; A is not changed)."""
+    out = np.array(A, dtype=np.float64, order="C", copy=True).reshape(6, 10)
+    g = _vec(g_init, 3)
+    check(LIB.loadid_regressor_add_zeroing(_ptr(g), _ptr(out)), "loadid_regressor_add_zeroing")
+    return out
+
+
+def with_offset(A) -> np.ndarray:
+    """[A E6] (6x16) from the library."""
+    a = np.ascontiguousarray(np.asarray(A, dtype=np.float64).reshape(6, 10))
+    out = np.zeros((6, 16))
+    check(LIB.loadid_regressor_with_offset(_ptr(a), _ptr(out)), "loadid_regressor_with_offset")
+    return out
+
+
+def apply(A, phi) -> np.ndarray:
+    a = np.ascontiguousarray(np.asarray(A, dtype=np.float64))
+    n = a.shape[1]
+    p = _vec(phi, n)
+    y = np.zeros(6)
+    check(LIB.loadid_regressor_apply(_ptr(a), n, _ptr(p), _ptr(y)), "loadid_regressor_apply")
+    return y
+
+
+# --------------------------------------------------------------------------
+# Estimator helpers
+# --------------------------------------------------------------------------
+def config_default(method: int, n_params: int = LOADID_NPHI) -> LoadidEstConfig:
+    cfg = LoadidEstConfig()
+    check(LIB.loadid_est_config_default(method, n_params, ctypes.byref(cfg)),
+          "loadid_est_config_default")
+    return cfg
+
+
+def weights_from_noise(cfg: LoadidEstConfig, sigma_f, sigma_tau, sigma_spec, sigma_alpha,
+                       sigma_omega, omega_typ) -> LoadidEstConfig:
+    check(LIB.loadid_est_weights_from_noise(ctypes.byref(cfg), sigma_f, sigma_tau, sigma_spec,
+                                            sigma_alpha, sigma_omega, omega_typ),
+          "loadid_est_weights_from_noise")
+    return cfg
+
+
+def row_weights(cfg: LoadidEstConfig) -> np.ndarray:
+    """D = diag(1 / row_sigma) as a vector (estimator.h, eq. 24)."""
+    return 1.0 / np.array(cfg.row_sigma[:LOADID_NROWS])
+
+
+def col_weights(cfg: LoadidEstConfig) -> np.ndarray:
+    """T as a vector of n_params + 1 entries (the last one: the wrench column)."""
+    return np.array(cfg.col_weight[: cfg.n_params + 1])
+
+
+class Estimator:
+    """Owns one loadid_est_t. Use as a context manager or call destroy()."""
+
+    def __init__(self, cfg: LoadidEstConfig):
+        self.cfg = cfg
+        self.n = cfg.n_params
+        self._h = ctypes.c_void_p()
+        check(LIB.loadid_est_create(ctypes.byref(cfg), ctypes.byref(self._h)), "loadid_est_create")
+        assert self._h.value, "loadid_est_create returned 0 but no estimator"
+
+    @classmethod
+    def create(cls, cfg: LoadidEstConfig) -> "Estimator":
+        return cls(cfg)
+
+    def update(self, A, y, C=None) -> int:
+        a = np.ascontiguousarray(np.asarray(A, dtype=np.float64).reshape(6, self.n))
+        yy = _vec(y, 6)
+        c = None
+        if C is not None:
+            c = np.ascontiguousarray(np.asarray(C, dtype=np.float64).reshape(6, self.n))
+        return LIB.loadid_est_update(self._h, _ptr(a), _ptr(c) if c is not None else None,
+                                     _ptr(yy))
+
+    def feed(self, As, ys, Cs=None) -> None:
+        """update() with every sample; each must return 0."""
+        for k in range(len(As)):
+            rc = self.update(As[k], ys[k], None if Cs is None else Cs[k])
+            assert rc == 0, f"update {k}: {rc} ({strerror(rc)})"
+
+    def estimate(self):
+        """Returns (rc, phi, info)."""
+        phi = np.zeros(self.n)
+        info = LoadidEstInfo()
+        rc = LIB.loadid_est_estimate(self._h, _ptr(phi), ctypes.byref(info))
+        return rc, phi, info
+
+    def reset(self) -> int:
+        return LIB.loadid_est_reset(self._h)
+
+    def config(self) -> LoadidEstConfig:
+        p = LIB.loadid_est_config(self._h)
+        return p.contents
+
+    def destroy(self) -> None:
+        if self._h is not None and self._h.value:
+            LIB.loadid_est_destroy(self._h)
+        self._h = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.destroy()
+
+    def __del__(self):  # safety net; tests call destroy() / use `with`
+        try:
+            self.destroy()
+        except Exception:
+            pass
+
+
+# --------------------------------------------------------------------------
+# Fixtures
+# --------------------------------------------------------------------------
+@pytest.fixture(scope="session")
+def lib() -> ctypes.CDLL:
+    return LIB
