@@ -1,13 +1,71 @@
 // One instantiation of each decomposition (linalg.hpp).
 #include "linalg.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace loadid {
 namespace linalg {
 
+// One-sided (Hestenes) Jacobi on X = M^T: rotate pairs of columns of X
+// (rows of M) until all are orthogonal; the accumulated rotation V holds
+// the left singular vectors of M, the column norms its singular values.
+// Relative accuracy like two-sided Jacobi (Demmel & Veselic 1992); here M is
+// Z = [S L] of eq. (29), whose rows are nearly orthogonal already, so a few
+// sweeps converge, and every rotation runs over contiguous columns.
 void svd_left(const Work &M, Square &U, Values &s) {
-    const Eigen::JacobiSVD<Work> svd(M, Eigen::ComputeFullU);
-    U = svd.matrixU();
-    s = svd.singularValues();
+    const int m = static_cast<int>(M.cols()), n = static_cast<int>(M.rows());
+    Eigen::Matrix<Real, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kMaxCols, kMaxDim> X = M.transpose();
+    Square V = Square::Identity(n, n);
+    Values norm2(n);
+    for (int j = 0; j < n; ++j) norm2(j) = X.col(j).squaredNorm();
+    const Real tol = kEps;
+    for (int sweep = 0; sweep < 60; ++sweep) {
+        bool rotated = false;
+        for (int p = 0; p < n - 1; ++p) {
+            for (int q = p + 1; q < n; ++q) {
+                const Real a = norm2(p), b = norm2(q);
+                if (!(a > 0) || !(b > 0)) continue;
+                Real *xp = X.col(p).data(), *xq = X.col(q).data();
+                Real g = 0;
+                for (int i = 0; i < m; ++i) g += xp[i] * xq[i];
+                if (!(std::abs(g) > tol * std::sqrt(a * b))) continue;
+                rotated = true;
+                // The rotation that zeroes the (p, q) element of X^T X.
+                const Real zeta = (b - a) / (Real(2) * g);
+                const Real t = (zeta >= 0 ? Real(1) : Real(-1)) / (std::abs(zeta) + std::sqrt(Real(1) + zeta * zeta));
+                const Real c = Real(1) / std::sqrt(Real(1) + t * t), sn = c * t;
+                for (int i = 0; i < m; ++i) {
+                    const Real u = xp[i], v = xq[i];
+                    xp[i] = c * u - sn * v;
+                    xq[i] = sn * u + c * v;
+                }
+                Real *vp = V.col(p).data(), *vq = V.col(q).data();
+                for (int i = 0; i < n; ++i) {
+                    const Real u = vp[i], v = vq[i];
+                    vp[i] = c * u - sn * v;
+                    vq[i] = sn * u + c * v;
+                }
+                norm2(p) = a - t * g;
+                norm2(q) = b + t * g;
+            }
+        }
+        if (!rotated) break;
+        for (int j = 0; j < n; ++j) norm2(j) = X.col(j).squaredNorm();  // refresh the running norms
+    }
+    // Sort by descending singular value (selection sort: n <= 17).
+    s.resize(n);
+    for (int j = 0; j < n; ++j) s(j) = X.col(j).norm();
+    U = V;
+    for (int j = 0; j < n - 1; ++j) {
+        int best = j;
+        for (int k = j + 1; k < n; ++k)
+            if (s(k) > s(best)) best = k;
+        if (best != j) {
+            std::swap(s(j), s(best));
+            U.col(j).swap(U.col(best));
+        }
+    }
 }
 
 void sym_eigenvalues(const Square &G, Values &lambda) {

@@ -59,12 +59,15 @@ static void test_rtls_tracks_batch_float(void **state) {
     assert_int_equal(dataset_make(&spec, &d), 0);
     loadid_est_config_t cfg;
     dataset_config(&spec, LOADID_METHOD_RTLS, &cfg);
-    cfg.max_noise_ratio = 1; /* compare raw estimates */
+    /* The default excitation gate stays on: where sigma_n and sigma_{n+1}
+     * nearly coincide (early, noisy data) the TLS vector is ill-determined
+     * and float has no digits to spare; those estimates are not published. */
     loadid_est_t *rtls, *batch;
     assert_int_equal(loadid_est_create(&cfg, &rtls), 0);
     cfg.method = LOADID_METHOD_TLS_BATCH;
     assert_int_equal(loadid_est_create(&cfg, &batch), 0);
     double worst = 0;
+    int compared = 0;
     for (int k = 0; k < d.n_samples; ++k) {
         assert_int_equal(loadid_est_update(rtls, dataset_A(&d, k), NULL, dataset_y(&d, k)), 0);
         assert_int_equal(loadid_est_update(batch, dataset_A(&d, k), NULL, dataset_y(&d, k)), 0);
@@ -75,11 +78,16 @@ static void test_rtls_tracks_batch_float(void **state) {
         if (ra) continue;
         double bd[10];
         for (int j = 0; j < 10; ++j) bd[j] = b[j];
-        const double err = max_rel_diff(a, bd, 10, 0.0);
+        /* Elements below 1e-4 [parameter units] count absolutely: a noisy
+         * early estimate crossing zero has no relative error. */
+        const double err = max_rel_diff(a, bd, 10, 1e-4);
         if (err > worst) worst = err;
+        ++compared;
     }
-    print_message("float RTLS vs batch TLS over %d samples: worst rel diff %.2e\n", d.n_samples, worst);
-    assert_true(worst < 2e-2);
+    print_message("float RTLS vs batch TLS over %d samples: %d published estimates compared, worst rel diff %.2e\n",
+                  d.n_samples, compared, worst);
+    assert_true(compared >= 10);
+    assert_true(worst < 2e-3);
     /* And both estimate the load: mass within 2 %. */
     loadid_real_t a[10];
     assert_int_equal(loadid_est_estimate(rtls, a, NULL), 0);

@@ -1,0 +1,229 @@
+#!/usr/bin/env bash
+# tools/setup.sh — install what is missing, build, and run loadid.
+#
+# On a fresh Debian 12 (bookworm), as root (or a user with sudo), from any
+# directory:
+#   bash tools/setup.sh deps        Debian packages + Python venv (build/venv)
+#   bash tools/setup.sh demo [ARGS] deps, release build, run loadid-demo ARGS
+#   bash tools/setup.sh test        deps, release + asan builds, all ctest tests
+#   bash tools/setup.sh bench       deps, release build, run the benchmarks
+#
+# System packages come only from Debian (apt-get), Python packages only from
+# PyPI, pinned in tools/requirements.txt, installed into build/venv. Nothing
+# else is downloaded. Every step is idempotent: a second run installs nothing
+# and only rebuilds what changed.
+set -euo pipefail
+
+# Debian packages (bookworm, main). Keep one group per line, with its reason.
+DEBIAN_PACKAGES=(
+  # compilers and the build: gcc/g++/make, cmake (presets need >= 3.25), ninja
+  build-essential cmake ninja-build pkg-config
+  # libraries of the estimation core and of the unit tests
+  libeigen3-dev libcmocka-dev
+  # the Debian Python that makes build/venv (its packages come from PyPI)
+  python3 python3-venv
+  # HTTPS to PyPI for pip, and git for working in the clone
+  ca-certificates git
+)
+
+# The Debian tools, by absolute path: a different python3 or cmake that comes
+# first on PATH (pyenv, pip, /usr/local) must not be picked up.
+DEBIAN_PYTHON=/usr/bin/python3
+CMAKE=/usr/bin/cmake
+CTEST=/usr/bin/ctest
+PYPI_INDEX=https://pypi.org/simple
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
+cd "$ROOT"
+
+VENV=build/venv
+REQUIREMENTS=tools/requirements.txt
+STAMP="$VENV/.requirements.sha256"
+
+usage() {
+  cat <<'EOF'
+usage: bash tools/setup.sh COMMAND [ARGS]
+
+commands:
+  deps         install missing Debian packages (apt-get) and the Python
+               virtual environment build/venv (pinned, tools/requirements.txt)
+  demo [ARGS]  deps, build the release preset, run loadid-demo with ARGS
+  test         deps, build the release and asan presets, run every ctest test
+  bench        deps, build the release preset, run bench_core and bench_core_float
+EOF
+}
+
+say() { printf '== %s  [%ss]\n' "$*" "$SECONDS"; } # seconds since start
+die() { printf 'setup.sh: %s\n' "$*" >&2; exit 1; }
+
+# --- Debian packages ---------------------------------------------------------
+
+missing_packages() {
+  local p
+  for p in "${DEBIAN_PACKAGES[@]}"; do
+    if [[ "$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)" != "install ok installed" ]]; then
+      printf '%s\n' "$p"
+    fi
+  done
+}
+
+install_debian_packages() {
+  command -v dpkg-query >/dev/null 2>&1 || die "needs Debian 12 (dpkg-query not found)"
+  local missing
+  mapfile -t missing < <(missing_packages)
+  if ((${#missing[@]} == 0)); then
+    say "Debian packages: all ${#DEBIAN_PACKAGES[@]} present"
+    return
+  fi
+  local -a as_root=()
+  if ((EUID != 0)); then
+    command -v sudo >/dev/null 2>&1 \
+      || die "must run as root to install ${missing[*]} (not root, and no sudo)"
+    as_root=(sudo)
+    [[ -t 0 ]] || as_root+=(-n) # no terminal to ask a password on: fail fast
+  fi
+  say "installing Debian packages: ${missing[*]}"
+  "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -q
+  "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive \
+    apt-get install -y -q --no-install-recommends "${missing[@]}"
+  mapfile -t missing < <(missing_packages)
+  ((${#missing[@]} == 0)) || die "apt-get did not install: ${missing[*]}"
+}
+
+# --- Python virtual environment ----------------------------------------------
+
+make_venv() {
+  # Recreate the venv if it is broken or was made by another Python.
+  if [[ -x "$VENV/bin/python" && -f "$VENV/pyvenv.cfg" ]] \
+    && grep -qx 'home = /usr/bin' "$VENV/pyvenv.cfg" \
+    && "$VENV/bin/python" -c '' 2>/dev/null; then
+    :
+  else
+    say "creating Python virtual environment $VENV ($DEBIAN_PYTHON)"
+    rm -rf "$VENV"
+    mkdir -p build
+    "$DEBIAN_PYTHON" -m venv "$VENV"
+  fi
+
+  local want
+  want="$(sha256sum "$REQUIREMENTS" | cut -d' ' -f1)"
+  if [[ -f "$STAMP" && "$(cat "$STAMP")" == "$want" ]]; then
+    say "Python packages: up to date ($REQUIREMENTS)"
+    return
+  fi
+  say "installing Python packages from PyPI ($REQUIREMENTS)"
+  rm -f "$STAMP"
+  # --isolated: ignore pip's configuration files and PIP_* variables (such as
+  # PIP_FIND_LINKS or PIP_EXTRA_INDEX_URL), so PyPI is the only source.
+  # --only-binary: the pins all have wheels; never compile one from source.
+  # Debian's CA bundle (package ca-certificates) for the HTTPS to PyPI.
+  local -a cert=()
+  if [[ -f /etc/ssl/certs/ca-certificates.crt ]]; then
+    cert=(--cert /etc/ssl/certs/ca-certificates.crt)
+  fi
+  "$VENV/bin/python" -m pip install --isolated --no-input --disable-pip-version-check \
+    --index-url "$PYPI_INDEX" --only-binary=:all: --timeout 60 "${cert[@]}" \
+    -r "$REQUIREMENTS"
+  "$VENV/bin/python" -m pip check --isolated --disable-pip-version-check
+  printf '%s\n' "$want" >"$STAMP"
+}
+
+deps() {
+  install_debian_packages
+  make_venv
+}
+
+# --- builds ------------------------------------------------------------------
+
+build() { # build PRESET (explicit returns: callers may test it in an `if`)
+  say "configuring $1"
+  "$CMAKE" --preset "$1" || return 1
+  say "building $1"
+  "$CMAKE" --build --preset "$1" || return 1
+}
+
+# run_tests PRESET: runs ctest, prints nothing of its own; sets SUMMARY.
+SUMMARY=
+run_tests() {
+  local log="build/$1/ctest.log" rc=0
+  say "testing $1"
+  # --no-tests=error: a suite that registered no test fails, it does not pass.
+  "$CTEST" --preset "$1" -j2 --output-on-failure --no-tests=error --timeout 900 \
+    2>&1 | tee "$log" || rc=$?
+  local total failed skipped
+  total="$(sed -nE 's/.* tests? failed out of ([0-9]+).*/\1/p' "$log" | tail -n1)"
+  failed="$(sed -nE 's/.* ([0-9]+) tests? failed out of.*/\1/p' "$log" | tail -n1)"
+  skipped="$(grep -cE '^[[:space:]]+[0-9]+ - .+ \(Skipped\)$' "$log" || true)"
+  if [[ -n "$total" && -n "$failed" ]]; then
+    SUMMARY="$1: $((total - failed - skipped)) passed, $failed failed, $skipped skipped"
+    ((rc == 0 && failed == 0))
+  else
+    SUMMARY="$1: ctest did not run (exit $rc)"
+    return 1
+  fi
+}
+
+cmd_test() {
+  deps
+  local -a presets=(release asan) built=() summary=()
+  local i ok=1
+  for i in "${!presets[@]}"; do
+    if build "${presets[i]}"; then built[i]=1; else built[i]=0; fi
+  done
+  for i in "${!presets[@]}"; do
+    if ((built[i] == 0)); then
+      summary+=("${presets[i]}: build failed")
+      ok=0
+    elif run_tests "${presets[i]}"; then
+      summary+=("$SUMMARY")
+    else
+      summary+=("$SUMMARY")
+      ok=0
+    fi
+  done
+  say "summary"
+  printf '%s\n' "${summary[@]}"
+  ((ok)) || { say "FAILED"; exit 1; }
+}
+
+# --- main --------------------------------------------------------------------
+
+if (($# == 0)); then
+  usage >&2
+  exit 2
+fi
+cmd="$1"
+shift
+case "$cmd" in
+  deps)
+    (($# == 0)) || { usage >&2; exit 2; }
+    deps
+    ;;
+  demo)
+    deps
+    build release
+    say "running build/release/tools/loadid-demo $*"
+    exec build/release/tools/loadid-demo "$@"
+    ;;
+  test)
+    (($# == 0)) || { usage >&2; exit 2; }
+    cmd_test
+    ;;
+  bench)
+    (($# == 0)) || { usage >&2; exit 2; }
+    deps
+    build release
+    say "running build/release/tests/bench_core"
+    build/release/tests/bench_core
+    say "running build/release/tests/bench_core_float"
+    build/release/tests/bench_core_float
+    ;;
+  -h | --help | help)
+    usage
+    ;;
+  *)
+    printf 'setup.sh: unknown command: %s\n' "$cmd" >&2
+    usage >&2
+    exit 2
+    ;;
+esac
