@@ -19,6 +19,7 @@
 #include <string.h>
 
 #include "dataset.h"
+#include "random_util.h"
 
 _Static_assert(sizeof(loadid_real_t) == sizeof(double), "these tests link the double core");
 
@@ -28,17 +29,6 @@ _Static_assert(sizeof(loadid_real_t) == sizeof(double), "these tests link the do
 #define ALL_FLAGS                                                                      \
     (LOADID_PHYS_MASS_NOT_POSITIVE | LOADID_PHYS_INERTIA_NOT_PD | LOADID_PHYS_TRIANGLE | \
      LOADID_PHYS_PSEUDO_INERTIA_NOT_PD)
-
-/* Fails with the numbers when |actual - expected| > tol (NaN fails too). */
-#define ASSERT_CLOSE(actual, expected, tol, what)                                              \
-    do {                                                                                       \
-        const double got_ = (actual), want_ = (expected), tol_ = (tol);                        \
-        if (!(fabs(got_ - want_) <= tol_)) {                                                   \
-            print_error("%s: got %.17g, expected %.17g (|diff| %.3g > tol %.3g)\n", (what),    \
-                        got_, want_, fabs(got_ - want_), tol_);                                \
-            fail();                                                                            \
-        }                                                                                      \
-    } while (0)
 
 #define ASSERT_FLAGS(got, want, what)                                                          \
     do {                                                                                       \
@@ -63,14 +53,6 @@ typedef struct {
 
 /* ---------------------------------------------------------------- helpers */
 
-static double uniform_in(loadid_rng_t *rng, double lo, double hi) {
-    return lo + (hi - lo) * loadid_rng_uniform(rng);
-}
-
-static void uniform_vec3(loadid_rng_t *rng, double lim, double v[3]) {
-    for (int i = 0; i < 3; ++i) v[i] = uniform_in(rng, -lim, lim);
-}
-
 static void sort3(double v[3]) {
     for (int i = 0; i < 2; ++i)
         for (int j = 0; j < 2 - i; ++j)
@@ -86,29 +68,6 @@ static double max_abs(const double *v, int n) {
     for (int i = 0; i < n; ++i)
         if (fabs(v[i]) > m) m = fabs(v[i]);
     return m;
-}
-
-/* A uniformly distributed rotation from a random unit quaternion. */
-static void random_rotation(loadid_rng_t *rng, mat3_t R) {
-    double q[4], n2;
-    do {
-        n2 = 0.0;
-        for (int i = 0; i < 4; ++i) {
-            q[i] = loadid_rng_normal(rng);
-            n2 += q[i] * q[i];
-        }
-    } while (n2 < 1e-6);
-    const double n = sqrt(n2);
-    const double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
-    R[0][0] = 1 - 2 * (y * y + z * z);
-    R[0][1] = 2 * (x * y - w * z);
-    R[0][2] = 2 * (x * z + w * y);
-    R[1][0] = 2 * (x * y + w * z);
-    R[1][1] = 1 - 2 * (x * x + z * z);
-    R[1][2] = 2 * (y * z - w * x);
-    R[2][0] = 2 * (x * z - w * y);
-    R[2][1] = 2 * (y * z + w * x);
-    R[2][2] = 1 - 2 * (x * x + y * y);
 }
 
 /* out = R diag(d) R^T */

@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "dataset.h"
+#include "random_util.h"
 
 _Static_assert(sizeof(loadid_real_t) == sizeof(double), "these tests link the double core");
 
@@ -28,26 +29,7 @@ _Static_assert(sizeof(loadid_real_t) == sizeof(double), "these tests link the do
 #define REL_TOL 1e-12
 #define G_NORM 9.81
 
-/* Fails with the numbers when |actual - expected| > tol (NaN fails too). */
-#define ASSERT_CLOSE(actual, expected, tol, what)                                              \
-    do {                                                                                       \
-        const double got_ = (actual), want_ = (expected), tol_ = (tol);                        \
-        if (!(fabs(got_ - want_) <= tol_)) {                                                   \
-            print_error("%s: got %.17g, expected %.17g (|diff| %.3g > tol %.3g)\n", (what),    \
-                        got_, want_, fabs(got_ - want_), tol_);                                \
-            fail();                                                                            \
-        }                                                                                      \
-    } while (0)
-
 /* ---------------------------------------------------------------- helpers */
-
-static double uniform_in(loadid_rng_t *rng, double lo, double hi) {
-    return lo + (hi - lo) * loadid_rng_uniform(rng);
-}
-
-static void uniform_vec3(loadid_rng_t *rng, double lim, double v[3]) {
-    for (int i = 0; i < 3; ++i) v[i] = uniform_in(rng, -lim, lim);
-}
 
 /* A random state of S within the ranges of the brief: spec = a - g in
  * [-20, 20] m/s^2, w in [-3, 3] rad/s, alpha in [-50, 50] rad/s^2. */
@@ -56,29 +38,6 @@ static void random_state(loadid_rng_t *rng, loadid_motion_t *m) {
     uniform_vec3(rng, 20.0, m->spec);
     uniform_vec3(rng, 3.0, m->omega);
     uniform_vec3(rng, 50.0, m->alpha);
-}
-
-/* A uniformly distributed rotation from a random unit quaternion. */
-static void random_rotation(loadid_rng_t *rng, double R[3][3]) {
-    double q[4], n2 = 0.0;
-    do {
-        n2 = 0.0;
-        for (int i = 0; i < 4; ++i) {
-            q[i] = loadid_rng_normal(rng);
-            n2 += q[i] * q[i];
-        }
-    } while (n2 < 1e-6);
-    const double n = sqrt(n2);
-    const double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
-    R[0][0] = 1 - 2 * (y * y + z * z);
-    R[0][1] = 2 * (x * y - w * z);
-    R[0][2] = 2 * (x * z + w * y);
-    R[1][0] = 2 * (x * y + w * z);
-    R[1][1] = 1 - 2 * (x * x + z * z);
-    R[1][2] = 2 * (y * z - w * x);
-    R[2][0] = 2 * (x * z - w * y);
-    R[2][1] = 2 * (y * z + w * x);
-    R[2][2] = 1 - 2 * (x * x + y * y);
 }
 
 /* A random, physically valid load as phi of eq. (5) about the origin of S:
