@@ -129,14 +129,8 @@ static void body_with_moments(loadid_rng_t *rng, double mass, const double p[3],
  * within about 100 times I_C, so the round trip loses at most two digits. */
 static void random_body(loadid_rng_t *rng, body_t *b) {
     const double m = uniform_in(rng, 0.1, 5.0);
-    double s[3], p[3];
-    for (int i = 0; i < 3; ++i) {
-        const double r = uniform_in(rng, 0.02, 0.15);
-        s[i] = m * r * r;
-    }
-    p[0] = s[1] + s[2];
-    p[1] = s[0] + s[2];
-    p[2] = s[0] + s[1];
+    double p[3];
+    random_principal_moments(rng, m, p);
     body_with_moments(rng, m, p, b);
 }
 

@@ -47,15 +47,9 @@ static void random_state(loadid_rng_t *rng, loadid_motion_t *m) {
  * inequality strictly. Then I_S = I_C + m (c.c E - c c^T). */
 static void random_load_phi(loadid_rng_t *rng, double phi[10]) {
     const double m = uniform_in(rng, 0.1, 5.0);
-    double c[3], R[3][3], s[3], p[3], Ic[3][3];
+    double c[3], R[3][3], p[3], Ic[3][3];
     uniform_vec3(rng, 0.15, c);
-    for (int i = 0; i < 3; ++i) {
-        const double r = uniform_in(rng, 0.02, 0.15);
-        s[i] = m * r * r;
-    }
-    p[0] = s[1] + s[2];
-    p[1] = s[0] + s[2];
-    p[2] = s[0] + s[1];
+    random_principal_moments(rng, m, p);
     random_rotation(rng, R);
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {

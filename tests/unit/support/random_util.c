@@ -35,3 +35,14 @@ void random_rotation(loadid_rng_t *rng, double R[3][3]) {
     R[2][1] = 2 * (y * z + w * x);
     R[2][2] = 1 - 2 * (x * x + y * y);
 }
+
+void random_principal_moments(loadid_rng_t *rng, double m, double p[3]) {
+    double s[3];
+    for (int i = 0; i < 3; ++i) {
+        const double r = uniform_in(rng, 0.02, 0.15);
+        s[i] = m * r * r;
+    }
+    p[0] = s[1] + s[2];
+    p[1] = s[0] + s[2];
+    p[2] = s[0] + s[1];
+}

@@ -22,6 +22,10 @@
 double uniform_in(loadid_rng_t *rng, double lo, double hi);
 /* Each component uniform in [-lim, lim). */
 void uniform_vec3(loadid_rng_t *rng, double lim, double v[3]);
+/* Principal moments of a real mass distribution of mass m [kg]: second
+ * moments s_i = m r_i^2 with r_i uniform in [0.02, 0.15] m, p_1 = s_2 + s_3
+ * and so on, so the triangle inequality holds strictly. */
+void random_principal_moments(loadid_rng_t *rng, double m, double p[3]);
 /* A uniformly distributed rotation, from a random unit quaternion. */
 void random_rotation(loadid_rng_t *rng, double R[3][3]);
 
