@@ -95,9 +95,10 @@ inline int excitation_gate(const Excitation<N> &ex, const loadid_est_config_t &c
         // within sqrt(6k) (1 +- gamma), gamma = sqrt((n+1) / 6k) (the
         // Marchenko-Pastur edge), so their adjacent ratio can come near
         // 1 - 2 gamma: the weakest direction must stand out beyond that.
-        // With forgetting, k is the memory length 1 / (1 - lambda).
+        // RLS and RIV with forgetting remember 1 / (1 - lambda) samples.
         Real k = Real(samples);
-        if (cfg.forgetting < 1) k = std::min(k, Real(1) / (Real(1) - cfg.forgetting));
+        const bool forgets = cfg.method == LOADID_METHOD_RLS || cfg.method == LOADID_METHOD_RIV;
+        if (forgets && cfg.forgetting < 1) k = std::min(k, Real(1) / (Real(1) - cfg.forgetting));
         const Real gamma = k > 0 ? std::sqrt(Real(N + 1) / (Real(LOADID_NROWS) * k)) : Real(1);
         const Real bound = std::min(cfg.max_noise_ratio, Real(1) - Real(2) * gamma);
         if (!(ratio <= bound)) return LOADID_E_NOT_EXCITED;

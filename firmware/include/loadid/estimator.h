@@ -48,12 +48,19 @@ typedef struct {
      * Default 1 for every row. */
     loadid_real_t row_sigma[LOADID_NROWS];
     /* Column weights T (eq. 24): n_params + 1 entries, the last for the
-     * wrench column [-]. Used by RTLS and TLS_BATCH; default 1. */
+     * wrench column [-]. The estimate of RTLS and TLS_BATCH depends on
+     * them; every method reports its condition number and noise ratio (and
+     * gates "not excited") on the weighted data D [A y] T. Default 1. */
     loadid_real_t col_weight[LOADID_MAX_PARAMS + 1];
     /* RLS/RIV: initial covariance Sigma_0 = p0 * I [units of phi^2] and
      * initial estimate 0. Default 1e6. */
     loadid_real_t p0;
-    /* RLS/RIV: exponential forgetting factor in (0, 1]; 1 = none (default). */
+    /* RLS/RIV: exponential forgetting factor in (0, 1]; 1 = none (default).
+     * Their condition number and noise ratio are then those of the
+     * forgetting-weighted data, and the noise-ratio gate counts at most
+     * 1 / (1 - forgetting) samples: below about 1 - 6 / (4 (n + 1))
+     * (0.86 for n = 10, 0.91 for n = 16) no estimate passes it. The other
+     * methods ignore this field. */
     loadid_real_t forgetting;
     /* RTLS: samples stacked for the initial SVD (eq. 24), 2 or 3. Default 2. */
     int rtls_init_samples;
@@ -74,7 +81,7 @@ typedef struct {
     loadid_real_t max_condition;
     /* Excitation: estimate() also reports LOADID_E_NOT_EXCITED while the
      * noise ratio sigma_{n+1} / sigma_n of the weighted D [A y] T exceeds
-     * this [-], or exceeds 1 - 2 sqrt((n+1) / 6k) after k samples (the
+     * this [-], or exceeds 1 - 2 sqrt((n + 1) / (6 k)) after k samples (the
      * spread of the singular values of pure noise, Marchenko-Pastur): no
      * direction of the parameters stands out of the noise. A still pose
      * with noisy accelerometer signals is well conditioned but not
