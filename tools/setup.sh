@@ -188,42 +188,48 @@ cmd_test() {
 
 # --- main --------------------------------------------------------------------
 
-if (($# == 0)); then
-  usage >&2
-  exit 2
-fi
-cmd="$1"
-shift
-case "$cmd" in
-  deps)
-    (($# == 0)) || { usage >&2; exit 2; }
-    deps
-    ;;
-  demo)
-    deps
-    build release
-    say "running build/release/tools/loadid-demo $*"
-    exec build/release/tools/loadid-demo "$@"
-    ;;
-  test)
-    (($# == 0)) || { usage >&2; exit 2; }
-    cmd_test
-    ;;
-  bench)
-    (($# == 0)) || { usage >&2; exit 2; }
-    deps
-    build release
-    say "running build/release/tests/bench_core"
-    build/release/tests/bench_core
-    say "running build/release/tests/bench_core_float"
-    build/release/tests/bench_core_float
-    ;;
-  -h | --help | help)
-    usage
-    ;;
-  *)
-    printf 'setup.sh: unknown command: %s\n' "$cmd" >&2
+# The whole command runs from a function, so bash has parsed the file before
+# any of it runs (an edit during a long run cannot break it).
+main() {
+  if (($# == 0)); then
     usage >&2
     exit 2
-    ;;
-esac
+  fi
+  cmd="$1"
+  shift
+  case "$cmd" in
+    deps)
+      (($# == 0)) || { usage >&2; exit 2; }
+      deps
+      ;;
+    demo)
+      deps
+      build release
+      say "running build/release/tools/loadid-demo${*:+ $*}"
+      exec build/release/tools/loadid-demo "$@"
+      ;;
+    test)
+      (($# == 0)) || { usage >&2; exit 2; }
+      cmd_test
+      ;;
+    bench)
+      (($# == 0)) || { usage >&2; exit 2; }
+      deps
+      build release
+      say "running build/release/tests/bench_core"
+      build/release/tests/bench_core
+      say "running build/release/tests/bench_core_float"
+      build/release/tests/bench_core_float
+      ;;
+    -h | --help | help)
+      usage
+      ;;
+    *)
+      printf 'setup.sh: unknown command: %s\n' "$cmd" >&2
+      usage >&2
+      exit 2
+      ;;
+  esac
+}
+
+main "$@"
