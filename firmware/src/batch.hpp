@@ -25,7 +25,7 @@ class Batch final : public loadid_est {
 
 public:
     explicit Batch(const loadid_est_config_t &c)
-        : loadid_est(c), d_(row_weights<N>(c)), t_(col_weights<N>(c)),
+        : loadid_est(c), d_(row_weights(c)), t_(col_weights<N>(c)),
           excitation_(d_, t_) {}
 
     // The one allocation; false when out of memory.
@@ -56,7 +56,7 @@ public:
     int estimate(Real *phi, loadid_est_info_t *info) const override {
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
-        const int gate = excitation_gate(excitation_, cfg, samples_, info);
+        const int gate = excitation_gate(excitation_, excitation_.noise_ratio(), cfg, samples_, info);
         if (gate) return gate;
         if (samples_ < 2) return LOADID_E_NOT_EXCITED;
 

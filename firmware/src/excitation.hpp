@@ -64,7 +64,6 @@ private:
     Eigen::Matrix<Real, N1, N1> gram_;
 };
 
-template <int N>
 inline Vec6 row_weights(const loadid_est_config_t &cfg) {
     Vec6 d;
     for (int i = 0; i < 6; ++i) d(i) = Real(1) / cfg.row_sigma[i];
@@ -77,12 +76,12 @@ inline Vec<N + 1> col_weights(const loadid_est_config_t &cfg) {
 }
 
 // The excitation gate shared by every method: fills the info fields it
-// owns and returns 0 or LOADID_E_NOT_EXCITED.
+// owns and returns 0 or LOADID_E_NOT_EXCITED. ratio is sigma_{n+1}/sigma_n
+// of D [A y] T: Excitation::noise_ratio(), or RTLS's own singular values.
 template <int N>
-inline int excitation_gate(const Excitation<N> &ex, const loadid_est_config_t &cfg, int64_t samples,
-                           loadid_est_info_t *info) {
+inline int excitation_gate(const Excitation<N> &ex, Real ratio, const loadid_est_config_t &cfg,
+                           int64_t samples, loadid_est_info_t *info) {
     const Real kappa = ex.condition();
-    const Real ratio = ex.noise_ratio();
     if (info) {
         *info = loadid_est_info_t{};
         info->samples = samples;

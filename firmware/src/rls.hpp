@@ -26,7 +26,7 @@ public:
     explicit RecursiveLs(const loadid_est_config_t &c)
         : loadid_est(c),
           instrumental_(c.method == LOADID_METHOD_RIV),
-          excitation_(row_weights<N>(c), col_weights<N>(c)) {
+          excitation_(row_weights(c), col_weights<N>(c)) {
         for (int i = 0; i < 6; ++i) lambda_(i) = c.row_sigma[i] * c.row_sigma[i];
         reset();
     }
@@ -56,7 +56,7 @@ public:
     int estimate(Real *phi, loadid_est_info_t *info) const override {
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
-        const int rc = excitation_gate(excitation_, cfg, samples_, info);
+        const int rc = excitation_gate(excitation_, excitation_.noise_ratio(), cfg, samples_, info);
         if (rc) return rc;
         if (!phi_.allFinite()) return LOADID_E_NOT_EXCITED;
         out = phi_;

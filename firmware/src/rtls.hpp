@@ -26,7 +26,7 @@ class Rtls final : public loadid_est {
 
 public:
     explicit Rtls(const loadid_est_config_t &c)
-        : loadid_est(c), d_(row_weights<N>(c)), t_(col_weights<N>(c)),
+        : loadid_est(c), d_(row_weights(c)), t_(col_weights<N>(c)),
           excitation_(d_, t_) { reset(); }
 
     void reset() override {
@@ -62,7 +62,7 @@ public:
     int estimate(Real *phi, loadid_est_info_t *info) const override {
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
-        const int gate = excitation_gate(excitation_, cfg, samples_, info);
+        const int gate = excitation_gate(excitation_, noise_ratio(), cfg, samples_, info);
         if (info) {
             info->sigma_min = rank_ == N1 ? s_(N) : Real(0);
             info->reorthogonalisations = reorth_;
@@ -105,6 +105,15 @@ private:
         s_.setZero();
         U_.leftCols(rank_) = Um.leftCols(rank_);
         s_.head(rank_) = sv.head(rank_);
+    }
+
+    // sigma_{n+1} / sigma_n from the singular values the update keeps (no
+    // second decomposition per estimate): 0 when the data are exact (rank n),
+    // 1 when even sigma_n is 0 (nothing stands out, as Excitation has it).
+    Real noise_ratio() const {
+        if (rank_ < N) return Real(1);
+        if (rank_ == N) return Real(0);
+        return s_(N) / s_(N - 1);
     }
 
     Real rank_tol(Real scale) const { return cfg.rtls_eps * Real(N1) * scale; }
