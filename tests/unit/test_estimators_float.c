@@ -35,16 +35,11 @@ static void test_exact_data_float(void **state) {
          * noise levels): in float, unit weights on columns of eq. (6) that
          * differ by 1e3 in scale cost three digits of the TLS vector. */
         loadid_est_weights_from_noise(&cfg, 0.1f, 0.005f, 0.5f, 5.0f, 0.02f, 2.0f);
-        loadid_est_t *e;
-        assert_int_equal(loadid_est_create(&cfg, &e), 0);
-        assert_int_equal(dataset_feed(&d, e, 0, d.n_samples), 0);
         loadid_real_t phi[10];
-        loadid_est_info_t info;
-        assert_int_equal(loadid_est_estimate(e, phi, &info), 0);
+        assert_int_equal(dataset_estimate(&d, &cfg, phi, NULL), 0);
         const double err = max_rel_diff(phi, d.truth, 10, 0.0);
         print_message("float exact %-9s max rel err %.2e\n", loadid_method_name(m[i]), err);
         assert_true(err < 2e-3);
-        loadid_est_destroy(e);
     }
     dataset_free(&d);
 }
@@ -113,11 +108,7 @@ static void test_recursive_methods_noisy_float(void **state) {
     for (int i = 0; i < 4; ++i) {
         loadid_est_config_t cfg;
         dataset_config(&spec, m[i], &cfg);
-        loadid_est_t *e;
-        assert_int_equal(loadid_est_create(&cfg, &e), 0);
-        assert_int_equal(dataset_feed(&d, e, 0, d.n_samples), 0);
-        assert_int_equal(loadid_est_estimate(e, phi[i], NULL), 0);
-        loadid_est_destroy(e);
+        assert_int_equal(dataset_estimate(&d, &cfg, phi[i], NULL), 0);
     }
     double ls[10];
     for (int j = 0; j < 10; ++j) ls[j] = phi[0][j];

@@ -46,13 +46,9 @@ static void test_rtls_beats_rls_on_inertia_over_seeds(void **state) {
         for (int i = 0; i < 2; ++i) {
             loadid_est_config_t cfg;
             dataset_config(&spec, m[i], &cfg);
-            loadid_est_t *est;
-            assert_int_equal(loadid_est_create(&cfg, &est), 0);
-            assert_int_equal(dataset_feed(&d, est, 0, d.n_samples), 0);
             loadid_real_t phi[10];
-            assert_int_equal(loadid_est_estimate(est, phi, NULL), 0);
+            assert_int_equal(dataset_estimate(&d, &cfg, phi, NULL), 0);
             e[i] = inertia_error(phi, d.truth);
-            loadid_est_destroy(est);
         }
         sum_rls += e[0];
         sum_rtls += e[1];

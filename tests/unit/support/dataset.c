@@ -98,6 +98,17 @@ int dataset_feed(const dataset_t *d, loadid_est_t *est, int from, int to) {
     return 0;
 }
 
+int dataset_estimate(const dataset_t *d, const loadid_est_config_t *cfg, loadid_real_t *phi,
+                     loadid_est_info_t *info) {
+    loadid_est_t *e = NULL;
+    int rc = loadid_est_create(cfg, &e);
+    if (rc) return rc;
+    rc = dataset_feed(d, e, 0, d->n_samples);
+    if (!rc) rc = loadid_est_estimate(e, phi, info);
+    loadid_est_destroy(e);
+    return rc;
+}
+
 double max_rel_diff(const loadid_real_t *a, const double *b, int n, double floor) {
     double m = 0;
     for (int i = 0; i < n; ++i) {

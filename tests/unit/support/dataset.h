@@ -48,6 +48,12 @@ void dataset_config(const dataset_spec_t *spec, loadid_method_t method, loadid_e
  * or 0. */
 int dataset_feed(const dataset_t *d, loadid_est_t *est, int from, int to);
 
+/* Creates an estimator from cfg, feeds it every sample, estimates into phi
+ * (and info, may be NULL) and destroys it. Returns the first non-zero code of
+ * create, update or estimate, or 0. */
+int dataset_estimate(const dataset_t *d, const loadid_est_config_t *cfg, loadid_real_t *phi,
+                     loadid_est_info_t *info);
+
 /* max_i |a_i - b_i| / max(|b_i|, floor) */
 double max_rel_diff(const loadid_real_t *a, const double *b, int n, double floor);
 
