@@ -10,6 +10,10 @@ extern "C" const char *loadid_strerror(int code) {
         case LOADID_E_NOT_EXCITED: return "not excited: too few samples or rank-deficient data";
         case LOADID_E_NO_SOLUTION: return "no TLS solution: last component of the TLS vector is zero";
         case LOADID_E_FULL: return "batch estimator full: raise batch_capacity";
+        case LOADID_E_STALE: return "joint data stale: no joint state close enough to the sample time";
+        case LOADID_E_NO_DATA: return "no joint state received yet";
+        case LOADID_E_TIME_ORDER: return "time stamp not after the previous one (rejected)";
+        case LOADID_E_MODEL: return "robot model is not a usable kinematic chain";
         default: break;
     }
     if (code < 0 && code > -1000) return std::strerror(-code);

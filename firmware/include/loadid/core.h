@@ -6,5 +6,6 @@
 #include "loadid/regressor.h"
 #include "loadid/estimator.h"
 #include "loadid/inertia.h"
+#include "loadid/joint_filter.h"
 
 #endif /* LOADID_CORE_H */

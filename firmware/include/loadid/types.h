@@ -33,7 +33,11 @@ enum loadid_error {
     LOADID_E_NONFINITE = -1001,   /* an input holds NaN or Inf; state unchanged */
     LOADID_E_NOT_EXCITED = -1002, /* too few samples or rank-deficient data */
     LOADID_E_NO_SOLUTION = -1003, /* TLS: last component of the TLS vector is 0 (eq. 36) */
-    LOADID_E_FULL = -1004         /* batch estimator: its row store is full */
+    LOADID_E_FULL = -1004,        /* batch estimator: its row store is full */
+    LOADID_E_STALE = -1005,       /* joint data too far from the sample time */
+    LOADID_E_NO_DATA = -1006,     /* no joint state (or setpoint) received yet */
+    LOADID_E_TIME_ORDER = -1007,  /* a time stamp not after the previous one */
+    LOADID_E_MODEL = -1008        /* the robot model is not a usable chain */
 };
 
 /* Returns a static, human-readable text for any return code of the core

@@ -1,0 +1,277 @@
+// Joint-space Kalman filter and Rauch-Tung-Striebel smoother
+// (loadid/joint_filter.h): per joint a triple integrator driven by white
+// jerk, measured in position only.
+//
+// References for the equations below:
+//  [BLK] Bar-Shalom, Li & Kirubarajan, "Estimation with Applications to
+//        Tracking and Navigation", Wiley 2001: sec. 6.2.3 (continuous
+//        Wiener-process acceleration model: F(dt) and Q(dt) of the header),
+//        sec. 5.2 (the discrete Kalman filter; Joseph form of the
+//        covariance update).
+//  [S]   Saerkkae, "Bayesian Filtering and Smoothing", CUP 2013, sec. 8.2
+//        (Rauch-Tung-Striebel smoother, Theorem 8.2).
+// The 3x3 covariances are plain arrays: no Eigen, nothing on the heap
+// after loadid_jf_create.
+#include "loadid/joint_filter.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <new>
+
+#include "finite.hpp"
+
+using Real = loadid_real_t;
+
+namespace {
+
+constexpr int kMaxJoints = 16;
+constexpr size_t kWorkPerSample = 9;  // smoother: x (3) and the upper triangle of P (6)
+
+// Mean and covariance of one joint's x = [q, qd, qdd].
+struct Gauss {
+    Real x[3];
+    Real P[3][3];  // symmetric: both triangles are kept equal
+};
+
+bool positive_finite(Real v) { return std::isfinite(v) && v > 0; }
+
+bool valid_config(const loadid_jf_config_t *c) {
+    return c && positive_finite(c->jerk_psd) && positive_finite(c->meas_sigma) &&
+           positive_finite(c->init_sigma_vel) && positive_finite(c->init_sigma_acc) &&
+           c->max_step_us > 0;
+}
+
+// |t1 - t0| in unsigned arithmetic: exact for any two int64 stamps.
+uint64_t distance_us(int64_t t0, int64_t t1) {
+    return t1 >= t0 ? uint64_t(t1) - uint64_t(t0) : uint64_t(t0) - uint64_t(t1);
+}
+
+// t1 - t0 in seconds (either sign), rounded once from the exact difference.
+Real seconds(int64_t t0, int64_t t1) {
+    const Real s = Real(double(distance_us(t0, t1)) / 1e6);
+    return t1 >= t0 ? s : -s;
+}
+
+// Does the step t0 -> t1 (t1 > t0) break the series (restart the filter)?
+bool is_gap(int64_t t0, int64_t t1, const loadid_jf_config_t &c) {
+    return distance_us(t0, t1) > uint64_t(c.max_step_us);
+}
+
+// The first measurement: q from it (variance meas_sigma^2), qd and qdd 0.
+void initialise(Gauss &g, Real z, const loadid_jf_config_t &c) {
+    g = Gauss{{z, 0, 0}, {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}};
+    g.P[0][0] = c.meas_sigma * c.meas_sigma;
+    g.P[1][1] = c.init_sigma_vel * c.init_sigma_vel;
+    g.P[2][2] = c.init_sigma_acc * c.init_sigma_acc;
+}
+
+// Time update over dt > 0 ([BLK] 6.2.3, 5.2): x <- F x, P <- F P F^T + Q.
+void predict(Gauss &g, Real dt, Real jerk_psd) {
+    const Real h = dt * dt / 2;
+    const Real F[3][3] = {{1, dt, h}, {0, 1, dt}, {0, 0, 1}};
+    g.x[0] += dt * g.x[1] + h * g.x[2];
+    g.x[1] += dt * g.x[2];
+    Real FP[3][3];
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            FP[i][j] = F[i][0] * g.P[0][j] + F[i][1] * g.P[1][j] + F[i][2] * g.P[2][j];
+    const Real dt2 = dt * dt, dt3 = dt2 * dt;
+    const Real Q[3][3] = {{dt3 * dt2 / 20, dt2 * dt2 / 8, dt3 / 6},
+                          {dt2 * dt2 / 8, dt3 / 3, dt2 / 2},
+                          {dt3 / 6, dt2 / 2, dt}};
+    for (int i = 0; i < 3; ++i)
+        for (int j = i; j < 3; ++j)  // upper triangle of F P F^T + Q, mirrored
+            g.P[i][j] = g.P[j][i] = FP[i][0] * F[j][0] + FP[i][1] * F[j][1] + FP[i][2] * F[j][2] +
+                                    jerk_psd * Q[i][j];
+}
+
+// Measurement update with z = q + v, var(v) = r, H = [1 0 0] ([BLK] 5.2):
+// K = P H^T / s, s = H P H^T + r; x <- x + K (z - H x); and P in Joseph
+// form, P <- (I - K H) P (I - K H)^T + r K K^T, which stays symmetric
+// positive definite under rounding (the float build) where the short form
+// (I - K H) P need not.
+void correct(Gauss &g, Real z, Real r) {
+    const Real s = g.P[0][0] + r;
+    const Real K[3] = {g.P[0][0] / s, g.P[1][0] / s, g.P[2][0] / s};
+    const Real e = z - g.x[0];
+    for (int i = 0; i < 3; ++i) g.x[i] += K[i] * e;
+    // A = I - K H: only its first column differs from I; A[0][0] = 1 - K[0]
+    // is taken as r / s, without the cancellation.
+    const Real a0[3] = {r / s, -K[1], -K[2]};
+    Real AP[3][3];  // A P: row i is P[i] + a0[i] P[0] (i > 0), a0[0] P[0] (i = 0)
+    for (int j = 0; j < 3; ++j) {
+        AP[0][j] = a0[0] * g.P[0][j];
+        AP[1][j] = g.P[1][j] + a0[1] * g.P[0][j];
+        AP[2][j] = g.P[2][j] + a0[2] * g.P[0][j];
+    }
+    for (int i = 0; i < 3; ++i)
+        for (int j = i; j < 3; ++j) {
+            // (A P A^T)[i][j] = sum_k AP[i][k] A[j][k] = AP[i][j] + AP[i][0] a0[j] (j > 0)
+            const Real apa = j == 0 ? AP[i][0] * a0[0] : AP[i][j] + AP[i][0] * a0[j];
+            g.P[i][j] = g.P[j][i] = apa + r * K[i] * K[j];
+        }
+}
+
+// Solves S y = b for a symmetric positive definite 3x3 S by S = L D L^T
+// (accurate for badly scaled S, as P of q, qd, qdd is). False when a pivot
+// is not positive (S not numerically positive definite).
+bool ldlt_solve(const Real S[3][3], const Real b[3], Real y[3]) {
+    const Real d0 = S[0][0];
+    if (!(d0 > 0)) return false;
+    const Real l10 = S[1][0] / d0, l20 = S[2][0] / d0;
+    const Real d1 = S[1][1] - l10 * l10 * d0;
+    if (!(d1 > 0)) return false;
+    const Real l21 = (S[2][1] - l20 * l10 * d0) / d1;
+    const Real d2 = S[2][2] - l20 * l20 * d0 - l21 * l21 * d1;
+    if (!(d2 > 0)) return false;
+    const Real z0 = b[0], z1 = b[1] - l10 * z0, z2 = b[2] - l20 * z0 - l21 * z1;
+    y[2] = z2 / d2;
+    y[1] = z1 / d1 - l21 * y[2];
+    y[0] = z0 / d0 - l10 * y[1] - l20 * y[2];
+    return true;
+}
+
+void store(const Gauss &g, Real *w) {
+    w[0] = g.x[0], w[1] = g.x[1], w[2] = g.x[2];
+    w[3] = g.P[0][0], w[4] = g.P[0][1], w[5] = g.P[0][2];
+    w[6] = g.P[1][1], w[7] = g.P[1][2], w[8] = g.P[2][2];
+}
+
+Gauss load(const Real *w) {
+    return Gauss{{w[0], w[1], w[2]}, {{w[3], w[4], w[5]}, {w[4], w[6], w[7]}, {w[5], w[7], w[8]}}};
+}
+
+}  // namespace
+
+struct loadid_jf {
+    loadid_jf_config_t cfg;
+    int n;
+    int64_t last;  // INT64_MIN: no measurement since create or reset
+    Gauss joint[kMaxJoints];
+};
+
+extern "C" int loadid_jf_config_default(loadid_jf_config_t *cfg) {
+    if (!cfg) return -EINVAL;
+    // Tuned on multi-sine joint motion up to 2 Hz, 1 kHz, 2^20 counts per
+    // revolution: see the figures in joint_filter.h.
+    cfg->jerk_psd = Real(1e3);
+    cfg->meas_sigma = Real(6.283185307179586 / 1048576.0 / 3.4641016151377546);  // 2 pi / 2^20 / sqrt(12)
+    cfg->init_sigma_vel = 1;
+    cfg->init_sigma_acc = 10;
+    cfg->max_step_us = 100000;
+    return 0;
+}
+
+extern "C" int loadid_jf_create(int num_joints, const loadid_jf_config_t *cfg, loadid_jf_t **out) {
+    if (!out) return -EINVAL;
+    *out = nullptr;
+    if (num_joints < 1 || num_joints > kMaxJoints || !valid_config(cfg)) return -EINVAL;
+    loadid_jf *jf = new (std::nothrow) loadid_jf;
+    if (!jf) return -ENOMEM;
+    jf->cfg = *cfg;
+    jf->n = num_joints;
+    jf->last = INT64_MIN;
+    *out = jf;
+    return 0;
+}
+
+extern "C" void loadid_jf_destroy(loadid_jf_t *jf) { delete jf; }
+
+extern "C" int loadid_jf_reset(loadid_jf_t *jf) {
+    if (!jf) return -EINVAL;
+    jf->last = INT64_MIN;
+    return 0;
+}
+
+extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real_t *q) {
+    if (!jf || !q) return -EINVAL;
+    if (!loadid::all_finite(q, jf->n)) return LOADID_E_NONFINITE;
+    const bool first = jf->last == INT64_MIN;
+    if (!first && t_us <= jf->last) return LOADID_E_TIME_ORDER;
+    const Real r = jf->cfg.meas_sigma * jf->cfg.meas_sigma;
+    if (first || is_gap(jf->last, t_us, jf->cfg)) {
+        for (int i = 0; i < jf->n; ++i) initialise(jf->joint[i], q[i], jf->cfg);
+    } else {
+        const Real dt = seconds(jf->last, t_us);
+        for (int i = 0; i < jf->n; ++i) {
+            predict(jf->joint[i], dt, jf->cfg.jerk_psd);
+            correct(jf->joint[i], q[i], r);
+        }
+    }
+    jf->last = t_us;
+    return 0;
+}
+
+extern "C" int loadid_jf_state_at(const loadid_jf_t *jf, int64_t t_us, loadid_real_t *q,
+                                  loadid_real_t *qd, loadid_real_t *qdd) {
+    if (!jf) return -EINVAL;
+    if (jf->last == INT64_MIN) return LOADID_E_NO_DATA;
+    // x(t) = F(dt) x: the model's mean, forwards or backwards.
+    const Real dt = seconds(jf->last, t_us), h = dt * dt / 2;
+    for (int i = 0; i < jf->n; ++i) {
+        const Real *x = jf->joint[i].x;
+        if (q) q[i] = x[0] + dt * x[1] + h * x[2];
+        if (qd) qd[i] = x[1] + dt * x[2];
+        if (qdd) qdd[i] = x[2];
+    }
+    return 0;
+}
+
+extern "C" int64_t loadid_jf_last_time(const loadid_jf_t *jf) { return jf ? jf->last : INT64_MIN; }
+
+extern "C" size_t loadid_jf_smooth_work_size(size_t count) {
+    return count > SIZE_MAX / kWorkPerSample ? SIZE_MAX : count * kWorkPerSample;
+}
+
+// Forward: the filter of loadid_jf_update, x_k and P_k stored per sample.
+// Backward ([S] Theorem 8.2), k = count-2 .. 0, with the prediction
+// x-_{k+1} = F x_k, P-_{k+1} = F P_k F^T + Q recomputed:
+//   x^s_k = x_k + G_k (x^s_{k+1} - x-_{k+1}),  G_k = P_k F^T (P-_{k+1})^-1,
+// evaluated as x_k + P_k F^T y with P-_{k+1} y = x^s_{k+1} - x-_{k+1} (no
+// inverse). A gap over max_step_us splits the series into independent
+// pieces, as it restarts the on-line filter: each piece is smoothed alone.
+extern "C" int loadid_jf_smooth(const loadid_jf_config_t *cfg, size_t count, const int64_t *t_us,
+                                const loadid_real_t *q, loadid_real_t *work, loadid_real_t *q_out,
+                                loadid_real_t *qd_out, loadid_real_t *qdd_out) {
+    if (!valid_config(cfg) || count == 0 || !t_us || !q || !work) return -EINVAL;
+    if (count > SIZE_MAX / kWorkPerSample) return -EINVAL;
+    for (size_t k = 0; k < count; ++k) {
+        if (!std::isfinite(q[k])) return LOADID_E_NONFINITE;
+        if (k > 0 && t_us[k] <= t_us[k - 1]) return LOADID_E_TIME_ORDER;
+    }
+    const Real r = cfg->meas_sigma * cfg->meas_sigma;
+    Gauss g;
+    for (size_t k = 0; k < count; ++k) {
+        if (k == 0 || is_gap(t_us[k - 1], t_us[k], *cfg)) {
+            initialise(g, q[k], *cfg);
+        } else {
+            predict(g, seconds(t_us[k - 1], t_us[k]), cfg->jerk_psd);
+            correct(g, q[k], r);
+        }
+        store(g, work + kWorkPerSample * k);
+    }
+    for (size_t k = count - 1; k-- > 0;) {
+        if (is_gap(t_us[k], t_us[k + 1], *cfg)) continue;  // end of a piece: x^s_k = x_k
+        Real *xk = work + kWorkPerSample * k;
+        const Real *xs_next = xk + kWorkPerSample;  // already smoothed
+        const Gauss f = load(xk);
+        Gauss p = f;
+        const Real dt = seconds(t_us[k], t_us[k + 1]), h = dt * dt / 2;
+        predict(p, dt, cfg->jerk_psd);
+        const Real d[3] = {xs_next[0] - p.x[0], xs_next[1] - p.x[1], xs_next[2] - p.x[2]};
+        Real y[3];
+        // P- is positive definite by construction (Q(dt) is for dt > 0); the
+        // guard only keeps rounding from ever writing a non-finite value.
+        if (!ldlt_solve(p.P, d, y)) continue;
+        const Real u[3] = {y[0], dt * y[0] + y[1], h * y[0] + dt * y[1] + y[2]};  // F^T y
+        for (int i = 0; i < 3; ++i) xk[i] += f.P[i][0] * u[0] + f.P[i][1] * u[1] + f.P[i][2] * u[2];
+    }
+    for (size_t k = 0; k < count; ++k) {
+        const Real *x = work + kWorkPerSample * k;
+        if (q_out) q_out[k] = x[0];
+        if (qd_out) qd_out[k] = x[1];
+        if (qdd_out) qdd_out[k] = x[2];
+    }
+    return 0;
+}
