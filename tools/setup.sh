@@ -20,6 +20,8 @@ DEBIAN_PACKAGES=(
   build-essential cmake ninja-build pkg-config
   # libraries of the estimation core and of the unit tests
   libeigen3-dev libcmocka-dev
+  # the robot model: URDF reader (kinematics of the sensor frame)
+  liburdfdom-dev
   # the Debian Python that makes build/venv (its packages come from PyPI)
   python3 python3-venv
   # HTTPS to PyPI for pip, and git for working in the clone

@@ -18,6 +18,15 @@ Helpers for the tests:
 * ``config_default(method, n_params)``   -> a filled LoadidEstConfig
 * ``weights_from_noise(cfg, ...)``       -> fills row_sigma / col_weight
 * ``Estimator(cfg)``                     -> create / update / estimate / reset / destroy
+
+and of the kinematics of the sensor frame (chain.h, kinematics.h) and the
+URDF loader (urdf.h, a library of its own named by LOADID_URDF_LIB; when that
+is not set, libloadid_urdf.so next to LOADID_CORE_LIB):
+
+* ``LoadidJointDesc``, ``LoadidChain``, ``LoadidKinState`` (ctypes mirrors)
+* ``urdf_lib`` fixture                   -> the loaded URDF library
+* ``load_urdf(lib, path, base, sensor)`` -> (rc, LoadidChain, message)
+* ``Kinematics(chain, gravity)``         -> create / eval / destroy
 """
 
 from __future__ import annotations
@@ -41,6 +50,13 @@ LOADID_E_NONFINITE = -1001
 LOADID_E_NOT_EXCITED = -1002
 LOADID_E_NO_SOLUTION = -1003
 LOADID_E_FULL = -1004
+LOADID_E_MODEL = -1008
+
+# chain.h
+LOADID_MAX_JOINTS = 16
+LOADID_NAME_MAX = 64
+LOADID_JOINT_REVOLUTE = 1
+LOADID_JOINT_PRISMATIC = 2
 
 METHOD_RLS = 1
 METHOD_RIV = 2
@@ -95,6 +111,48 @@ class LoadidEstInfo(ctypes.Structure):
         ("sigma_min_multiplicity", ctypes.c_int),
         ("reorthogonalisations", ctypes.c_int),
         ("orthogonality_error", real_t),
+    ]
+
+
+class LoadidJointDesc(ctypes.Structure):
+    """loadid_joint_desc_t (chain.h)."""
+
+    _fields_ = [
+        ("name", ctypes.c_char * LOADID_NAME_MAX),
+        ("type", ctypes.c_int),                              # loadid_joint_type_t (enum)
+        ("origin_xyz", ctypes.c_double * 3),
+        ("origin_rot", ctypes.c_double * 9),                 # row-major
+        ("axis", ctypes.c_double * 3),
+        ("lower", ctypes.c_double),
+        ("upper", ctypes.c_double),
+        ("velocity", ctypes.c_double),
+    ]
+
+
+class LoadidChain(ctypes.Structure):
+    """loadid_chain_t (chain.h): doubles whatever loadid_real_t is."""
+
+    _fields_ = [
+        ("base_link", ctypes.c_char * LOADID_NAME_MAX),
+        ("sensor_link", ctypes.c_char * LOADID_NAME_MAX),
+        ("num_joints", ctypes.c_int),
+        ("joints", LoadidJointDesc * LOADID_MAX_JOINTS),     # base to sensor order
+        ("tip_xyz", ctypes.c_double * 3),
+        ("tip_rot", ctypes.c_double * 9),                    # row-major
+    ]
+
+
+class LoadidKinState(ctypes.Structure):
+    """loadid_kin_state_t (kinematics.h): loadid_real_t throughout."""
+
+    _fields_ = [
+        ("rotation", real_t * 9),    # S -> base, row-major
+        ("position", real_t * 3),    # origin of S in base
+        ("omega", real_t * 3),       # in S
+        ("alpha", real_t * 3),
+        ("accel", real_t * 3),
+        ("gravity", real_t * 3),
+        ("spec", real_t * 3),        # accel - gravity
     ]
 
 
@@ -155,6 +213,60 @@ def _load_library() -> ctypes.CDLL:
 
 
 LIB = _load_library()
+
+
+def _declare_kinematics(lib: ctypes.CDLL) -> None:
+    """chain.h and kinematics.h, declared on first use so that the other
+    cross-checks do not depend on them."""
+    if getattr(lib, "_loadid_kin_declared", False):
+        return
+    missing = [n for n in ("loadid_chain_check", "loadid_kin_create", "loadid_kin_eval",
+                           "loadid_kin_destroy", "loadid_kin_num_joints")
+               if not hasattr(lib, n)]
+    if missing:
+        pytest.fail(f"the core library lacks {', '.join(missing)} (kinematics.h not built in?)")
+    chain_p = ctypes.POINTER(LoadidChain)
+    lib.loadid_chain_check.restype = ctypes.c_int
+    lib.loadid_chain_check.argtypes = [chain_p]
+    lib.loadid_kin_create.restype = ctypes.c_int
+    lib.loadid_kin_create.argtypes = [chain_p, ctypes.POINTER(ctypes.c_double),
+                                      ctypes.POINTER(ctypes.c_void_p)]
+    lib.loadid_kin_destroy.restype = None
+    lib.loadid_kin_destroy.argtypes = [ctypes.c_void_p]
+    lib.loadid_kin_num_joints.restype = ctypes.c_int
+    lib.loadid_kin_num_joints.argtypes = [ctypes.c_void_p]
+    lib.loadid_kin_eval.restype = ctypes.c_int
+    lib.loadid_kin_eval.argtypes = [ctypes.c_void_p, real_p, real_p, real_p,
+                                    ctypes.POINTER(LoadidKinState)]
+    lib._loadid_kin_declared = True
+
+
+def urdf_library_path() -> str:
+    """LOADID_URDF_LIB, else libloadid_urdf.so next to LOADID_CORE_LIB."""
+    path = os.environ.get("LOADID_URDF_LIB")
+    if not path:
+        path = str(pathlib.Path(os.environ["LOADID_CORE_LIB"]).parent / "libloadid_urdf.so")
+    return path
+
+
+def _load_urdf_library() -> ctypes.CDLL:
+    path = urdf_library_path()
+    if not os.path.isfile(path):
+        pytest.fail(f"URDF library {path!r} does not exist: set LOADID_URDF_LIB to "
+                    "libloadid_urdf.so (build target loadid_urdf_shared)")
+    try:
+        lib = ctypes.CDLL(path)
+    except OSError as exc:  # pragma: no cover - depends on the machine
+        pytest.fail(f"URDF library {path!r} cannot be loaded: {exc}")
+    chain_p = ctypes.POINTER(LoadidChain)
+    lib.loadid_urdf_load_file.restype = ctypes.c_int
+    lib.loadid_urdf_load_file.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p,
+                                          chain_p, ctypes.c_char_p, ctypes.c_size_t]
+    lib.loadid_urdf_load_string.restype = ctypes.c_int
+    lib.loadid_urdf_load_string.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p,
+                                            ctypes.c_char_p, chain_p, ctypes.c_char_p,
+                                            ctypes.c_size_t]
+    return lib
 
 
 def strerror(code: int) -> str:
@@ -304,8 +416,93 @@ class Estimator:
 
 
 # --------------------------------------------------------------------------
+# Chain, URDF loader and kinematics helpers
+# --------------------------------------------------------------------------
+def load_urdf(urdf, path, base_link="base_link", sensor_link="ft_sensor"):
+    """loadid_urdf_load_file: returns (rc, LoadidChain, message)."""
+    chain = LoadidChain()
+    err = ctypes.create_string_buffer(512)
+    rc = urdf.loadid_urdf_load_file(str(path).encode(), base_link.encode(), sensor_link.encode(),
+                                    ctypes.byref(chain), err, len(err))
+    return rc, chain, err.value.decode(errors="replace")
+
+
+def load_urdf_string(urdf, xml, name="test.urdf", base_link="base_link",
+                     sensor_link="ft_sensor"):
+    """loadid_urdf_load_string: returns (rc, LoadidChain, message)."""
+    chain = LoadidChain()
+    err = ctypes.create_string_buffer(512)
+    rc = urdf.loadid_urdf_load_string(xml.encode(), name.encode(), base_link.encode(),
+                                      sensor_link.encode(), ctypes.byref(chain), err, len(err))
+    return rc, chain, err.value.decode(errors="replace")
+
+
+def chain_check(chain: LoadidChain) -> int:
+    _declare_kinematics(LIB)
+    return LIB.loadid_chain_check(ctypes.byref(chain))
+
+
+def kin_state_dict(st: LoadidKinState) -> dict:
+    """The fields of a loadid_kin_state_t as numpy arrays (rotation 3x3)."""
+    out = {name: np.array(getattr(st, name)[:], dtype=np.float64)
+           for name, _ in LoadidKinState._fields_}
+    out["rotation"] = out["rotation"].reshape(3, 3)
+    return out
+
+
+class Kinematics:
+    """Owns one loadid_kin_t. Use as a context manager or call destroy()."""
+
+    def __init__(self, chain: LoadidChain, gravity=(0.0, 0.0, -9.81)):
+        _declare_kinematics(LIB)
+        self.chain = chain
+        g = _vec(gravity, 3)
+        self._h = ctypes.c_void_p()
+        check(LIB.loadid_kin_create(ctypes.byref(chain), _ptr(g), ctypes.byref(self._h)),
+              "loadid_kin_create")
+        assert self._h.value, "loadid_kin_create returned 0 but no handle"
+        self.n = LIB.loadid_kin_num_joints(self._h)
+
+    def eval_raw(self, q, qd=None, qdd=None, out: LoadidKinState | None = None):
+        """Returns (rc, LoadidKinState); qd / qdd None pass NULL."""
+        a = [None if x is None else _vec(x, self.n) for x in (q, qd, qdd)]
+        st = LoadidKinState() if out is None else out
+        rc = LIB.loadid_kin_eval(self._h, *(None if x is None else _ptr(x) for x in a),
+                                 ctypes.byref(st))
+        return rc, st
+
+    def eval(self, q, qd=None, qdd=None) -> dict:
+        rc, st = self.eval_raw(q, qd, qdd)
+        check(rc, "loadid_kin_eval")
+        return kin_state_dict(st)
+
+    def destroy(self) -> None:
+        if self._h is not None and self._h.value:
+            LIB.loadid_kin_destroy(self._h)
+        self._h = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.destroy()
+
+    def __del__(self):  # safety net
+        try:
+            self.destroy()
+        except Exception:
+            pass
+
+
+# --------------------------------------------------------------------------
 # Fixtures
 # --------------------------------------------------------------------------
 @pytest.fixture(scope="session")
 def lib() -> ctypes.CDLL:
     return LIB
+
+
+@pytest.fixture(scope="session")
+def urdf_lib() -> ctypes.CDLL:
+    """The URDF loader (loadid/urdf.h), LOADID_URDF_LIB."""
+    return _load_urdf_library()

@@ -6,6 +6,8 @@
 #include "loadid/regressor.h"
 #include "loadid/estimator.h"
 #include "loadid/inertia.h"
+#include "loadid/chain.h"
+#include "loadid/kinematics.h"
 #include "loadid/joint_filter.h"
 
 #endif /* LOADID_CORE_H */
