@@ -51,7 +51,7 @@ commands:
                virtual environment build/venv (pinned, tools/requirements.txt)
   demo [ARGS]  deps, build the release preset, run loadid-demo with ARGS
   test         deps, build the release and asan presets, run every ctest test
-  bench        deps, build the release preset, run bench_core and bench_core_float
+  bench        deps, build the release preset, run bench_core, bench_core_float, bench_signals
 EOF
 }
 
@@ -222,6 +222,8 @@ main() {
       build/release/tests/bench_core
       say "running build/release/tests/bench_core_float"
       build/release/tests/bench_core_float
+      say "running build/release/tests/bench_signals"
+      build/release/tests/bench_signals
       ;;
     -h | --help | help)
       usage

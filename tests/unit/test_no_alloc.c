@@ -1,7 +1,9 @@
 /*
  * The per-sample path of the core (update and estimate of every method,
  * both parameter counts, including RTLS's initial SVD and its rank-growing
- * branch) performs no heap allocation and no system call:
+ * branch; joint states into the Kalman filters, the signal sources with
+ * forward kinematics, and their refusals; the offline smoother on a
+ * caller's work space) performs no heap allocation and no system call:
  *  - malloc, calloc, realloc, free and the aligned allocators are
  *    interposed and counted (C++ operator new ends in malloc too);
  *  - the same loop runs in a child under SECCOMP_MODE_STRICT, where any
@@ -14,6 +16,8 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <math.h>
+#include <stdlib.h>
 #include <string.h>
 #include <linux/seccomp.h>
 #include <signal.h>
@@ -25,6 +29,7 @@
 #include <cmocka.h>
 
 #include "dataset.h"
+#include "loadid/core.h"
 
 /* ---- allocation counting by interposition ---- */
 extern void *__libc_malloc(size_t);
@@ -71,10 +76,74 @@ static const loadid_method_t kAll[] = {LOADID_METHOD_RLS, LOADID_METHOD_RIV, LOA
                                        LOADID_METHOD_LS_BATCH, LOADID_METHOD_TLS_BATCH};
 enum { NEST = 10, NSAMPLES = 300 };
 
+enum { NJ = 7 };
+
 typedef struct {
     dataset_t d[2];
     loadid_est_t *est[NEST];
+    loadid_signals_t *sig;
+    int64_t t_us[NSAMPLES];
+    loadid_real_t q[NSAMPLES][NJ];
+    loadid_real_t *smooth_work;
+    loadid_real_t q1[NSAMPLES], smoothed[3][NSAMPLES];
 } workload_t;
+
+/* A 7-joint arm (axes alternating z, y, x; one prismatic joint), and a
+ * sampled smooth motion of it. */
+static void signals_make(workload_t *w) {
+    loadid_chain_t c;
+    memset(&c, 0, sizeof c);
+    strcpy(c.base_link, "base");
+    strcpy(c.sensor_link, "sensor");
+    c.num_joints = NJ;
+    const double id[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    for (int i = 0; i < NJ; ++i) {
+        loadid_joint_desc_t *j = &c.joints[i];
+        j->name[0] = (char)('a' + i);
+        j->type = i == 3 ? LOADID_JOINT_PRISMATIC : LOADID_JOINT_REVOLUTE;
+        j->origin_xyz[0] = 0.05 * i, j->origin_xyz[2] = 0.1;
+        memcpy(j->origin_rot, id, sizeof id);
+        j->axis[2 - i % 3] = 1;
+        j->lower = -1e9, j->upper = 1e9, j->velocity = 1e9;
+    }
+    memcpy(c.tip_rot, id, sizeof id);
+    const double g[3] = {0, 0, -9.81};
+    loadid_signals_config_t cfg;
+    loadid_signals_config_default(&cfg);
+    assert_int_equal(loadid_signals_create(&c, g, &cfg, &w->sig), 0);
+    for (int k = 0; k < NSAMPLES; ++k) {
+        w->t_us[k] = 1700000000000000LL + 1000LL * k;
+        for (int i = 0; i < NJ; ++i) w->q[k][i] = (loadid_real_t)(0.3 * sin(0.01 * k * (i + 1)));
+        w->q1[k] = w->q[k][1];
+    }
+    w->smooth_work = calloc(loadid_jf_smooth_work_size(NSAMPLES), sizeof *w->smooth_work);
+    assert_non_null(w->smooth_work);
+}
+
+/* Every sample: a joint state, then the sensor sample 0.3 ms later; a bad
+ * joint message and a stale sample in the middle; then the smoother over
+ * one joint. Returns the number of unexpected return codes. */
+static int signals_run(workload_t *w) {
+    int bad = 0;
+    const loadid_real_t spec[3] = {0, 0, 9.81}, alpha[3] = {0, 0, 0};
+    for (int k = 0; k < NSAMPLES; ++k) {
+        if (loadid_signals_push_joints(w->sig, w->t_us[k], NJ, w->q[k], w->q[k]) != 0) ++bad;
+        loadid_regressor_input_t m, instr;
+        if (loadid_signals_at(w->sig, w->t_us[k] + 300, spec, alpha, NULL, &m, &instr) != 0) ++bad;
+        if (k == NSAMPLES / 2) {
+            if (loadid_signals_push_joints(w->sig, w->t_us[k], NJ, w->q[k], NULL) != LOADID_E_TIME_ORDER) ++bad;
+            if (loadid_signals_at(w->sig, w->t_us[k] + 60000, spec, alpha, NULL, &m, &instr) != LOADID_E_STALE) ++bad;
+            loadid_kin_state_t st;
+            if (loadid_signals_kinematics_at(w->sig, w->t_us[k], &st) != 0) ++bad;
+        }
+    }
+    loadid_jf_config_t jcfg;
+    loadid_jf_config_default(&jcfg);
+    if (loadid_jf_smooth(&jcfg, NSAMPLES, w->t_us, w->q1, w->smooth_work, w->smoothed[0],
+                         w->smoothed[1], w->smoothed[2]) != 0) ++bad;
+    if (loadid_signals_reset(w->sig) != 0) ++bad;
+    return bad;
+}
 
 static void workload_make(workload_t *w) {
     const loadid_synth_noise_t noise = {
@@ -90,10 +159,13 @@ static void workload_make(workload_t *w) {
             assert_int_equal(loadid_est_create(&cfg, &w->est[i * 5 + m]), 0);
         }
     }
+    signals_make(w);
 }
 
 static void workload_free(workload_t *w) {
     for (int i = 0; i < NEST; ++i) loadid_est_destroy(w->est[i]);
+    loadid_signals_destroy(w->sig);
+    free(w->smooth_work);
     dataset_free(&w->d[0]);
     dataset_free(&w->d[1]);
 }
@@ -120,12 +192,12 @@ static int workload_run(workload_t *w) {
         }
         if (loadid_est_reset(w->est[i]) != 0) ++bad;
     }
-    return bad;
+    return bad + signals_run(w);
 }
 
 static void test_update_and_estimate_do_not_allocate(void **state) {
     (void)state;
-    workload_t w;
+    static workload_t w;
     workload_make(&w);
     /* The counter works: a plain malloc is seen. */
     counting = 1;
@@ -145,7 +217,7 @@ static void test_update_and_estimate_do_not_allocate(void **state) {
 
 static void test_update_and_estimate_make_no_system_call(void **state) {
     (void)state;
-    workload_t w;
+    static workload_t w;
     workload_make(&w);
     int fd[2];
     assert_int_equal(pipe(fd), 0);

@@ -9,5 +9,6 @@
 #include "loadid/chain.h"
 #include "loadid/kinematics.h"
 #include "loadid/joint_filter.h"
+#include "loadid/signals.h"
 
 #endif /* LOADID_CORE_H */

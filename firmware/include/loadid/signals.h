@@ -1,0 +1,128 @@
+/*
+ * Signal sources and time alignment (paper sec. V.C, Fig. 9): what feeds
+ * the regressor of eq. (6) at each sensor sample.
+ *
+ *   SENSOR    a - g and alpha from the JR3 accelerometers, omega from the
+ *             joint Kalman filter and forward kinematics
+ *   KF        a - g, omega and alpha from the encoders: Kalman filter and
+ *             forward kinematics
+ *   SETPOINT  the same from the commanded positions (through a filter of
+ *             the same kind, or exact derivatives when the trajectory is
+ *             known)
+ *   MIXED     a - g from the JR3, omega and alpha from the Kalman filter
+ *
+ * RIV's instruments (eq. 20) always come from SETPOINT.
+ *
+ * Joint states and sensor samples come on their own clocks' ticks. The
+ * joint quantities are evaluated at each sensor sample's time by the
+ * filters' model (loadid_jf_state_at), and a sample whose nearest joint
+ * state is further away than max_joint_age_us (or that comes before any
+ * joint state) is refused and counted, never served from old data.
+ */
+#ifndef LOADID_SIGNALS_H
+#define LOADID_SIGNALS_H
+
+#include <stdint.h>
+
+#include "loadid/chain.h"
+#include "loadid/joint_filter.h"
+#include "loadid/kinematics.h"
+#include "loadid/types.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum {
+    LOADID_SIGNALS_SENSOR = 1,
+    LOADID_SIGNALS_KF = 2,
+    LOADID_SIGNALS_SETPOINT = 3,
+    LOADID_SIGNALS_MIXED = 4
+} loadid_signal_source_t;
+
+/* "sensor", "kf", "setpoint", "mixed" (the configuration's names). Parse
+ * returns 0 or -EINVAL; name returns NULL for an unknown value. */
+int loadid_signal_source_parse(const char *name, loadid_signal_source_t *out);
+const char *loadid_signal_source_name(loadid_signal_source_t source);
+
+/* The regressor's inputs, in S. */
+typedef struct {
+    loadid_real_t spec[3];        /* a - g [m/s^2] */
+    loadid_real_t omega[3];       /* [rad/s] */
+    loadid_real_t alpha[3];       /* [rad/s^2] */
+} loadid_regressor_input_t;
+
+typedef struct {
+    loadid_signal_source_t source;    /* default MIXED (DESIGN.md) */
+    loadid_jf_config_t measured;      /* filter of the encoder positions */
+    loadid_jf_config_t setpoint;      /* filter of the commanded positions */
+    /* A sensor sample further than this from the newest joint state [us]
+     * is refused as stale. Default 5000 (five joint periods at 1 kHz). */
+    int64_t max_joint_age_us;
+} loadid_signals_config_t;
+
+/* Counters since create or reset. */
+typedef struct {
+    int64_t joint_msgs_ok;
+    int64_t joint_msgs_bad;       /* wrong joint count, NaN/Inf, time order */
+    int64_t samples_ok;           /* loadid_signals_at served them */
+    int64_t samples_stale;        /* refused: joint data too old or too new */
+    int64_t samples_no_joints;    /* refused: no joint state yet */
+    int64_t samples_bad;          /* refused: NaN/Inf sensor input */
+} loadid_signals_stats_t;
+
+typedef struct loadid_signals loadid_signals_t; /* opaque */
+
+int loadid_signals_config_default(loadid_signals_config_t *cfg);
+
+/* Builds the kinematics of chain (gravity in the base frame) and the two
+ * filter banks. The only allocation. Returns 0, -EINVAL or -ENOMEM. */
+int loadid_signals_create(const loadid_chain_t *chain, const double gravity[3],
+                          const loadid_signals_config_t *cfg,
+                          loadid_signals_t **out);
+
+void loadid_signals_destroy(loadid_signals_t *s);
+
+/* Forgets all joint data and zeroes the counters. Returns 0 or -EINVAL. */
+int loadid_signals_reset(loadid_signals_t *s);
+
+int loadid_signals_num_joints(const loadid_signals_t *s);
+
+/* One joint state (joint_state_t): measured positions and, if not NULL,
+ * setpoints, num_joints each. Returns 0, or (counted in joint_msgs_bad,
+ * nothing changed) -EBADMSG for a joint count not the chain's,
+ * LOADID_E_NONFINITE, LOADID_E_TIME_ORDER; -EINVAL for a NULL s. */
+int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us,
+                               int num_joints, const loadid_real_t *position,
+                               const loadid_real_t *setpoint);
+
+/* The regressor's inputs for the sensor sample at t_us, from the
+ * configured source, and RIV's instruments from the setpoints.
+ * jr3_spec, jr3_alpha: the JR3's a - g and alpha in S (needed by SENSOR
+ * and MIXED, else may be NULL). exact_setpoint: NULL, or q, qd, qdd of
+ * the commanded trajectory at t_us (3 * num_joints values), used instead
+ * of the setpoint filter. motion and instruments may be NULL.
+ * Returns 0 (counted in samples_ok); or, counted, nothing written:
+ * LOADID_E_NO_DATA (no joint state yet, or no setpoint when one is
+ * needed), LOADID_E_STALE, LOADID_E_NONFINITE; -EINVAL (NULL s, or a JR3
+ * input the source needs is NULL). */
+int loadid_signals_at(loadid_signals_t *s, int64_t t_us,
+                      const loadid_real_t jr3_spec[3],
+                      const loadid_real_t jr3_alpha[3],
+                      const loadid_real_t *exact_setpoint,
+                      loadid_regressor_input_t *motion, loadid_regressor_input_t *instruments);
+
+/* Forward kinematics of the measured joints (filtered) at t_us: the pose,
+ * and gravity in S, e.g. g_init of eq. (7) at zeroing. Same returns as
+ * loadid_signals_at (not counted). */
+int loadid_signals_kinematics_at(const loadid_signals_t *s, int64_t t_us,
+                                 loadid_kin_state_t *state);
+
+int loadid_signals_stats(const loadid_signals_t *s,
+                         loadid_signals_stats_t *stats);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* LOADID_SIGNALS_H */

@@ -1,0 +1,230 @@
+// Signal sources and time alignment (loadid/signals.h, paper Fig. 9): the
+// joint filters, evaluated at the sensor sample's time, and the forward
+// kinematics give a - g, omega, alpha in S; the JR3 gives them directly.
+#include "loadid/signals.h"
+
+#include <cerrno>
+#include <cstring>
+#include <new>
+
+#include "enum_value.hpp"
+#include "finite.hpp"
+
+using namespace loadid;
+
+struct loadid_signals {
+    loadid_signals_config_t cfg;
+    int n;
+    loadid_kin_t *kin;
+    loadid_jf_t *measured;
+    loadid_jf_t *setpoint;
+    loadid_signals_stats_t stats;
+};
+
+namespace {
+
+bool valid_source(int s) { return s >= LOADID_SIGNALS_SENSOR && s <= LOADID_SIGNALS_MIXED; }
+
+const char *const kNames[] = {nullptr, "sensor", "kf", "setpoint", "mixed"};
+
+void destroy(loadid_signals *s) {
+    loadid_kin_destroy(s->kin);
+    loadid_jf_destroy(s->measured);
+    loadid_jf_destroy(s->setpoint);
+    delete s;
+}
+
+// Is a joint stream close enough to t to be evaluated there?
+int stream_ready(const loadid_jf_t *jf, int64_t t_us, int64_t max_age_us) {
+    int64_t last = loadid_jf_last_time(jf);
+    if (last == INT64_MIN) return LOADID_E_NO_DATA;
+    // The distance in unsigned arithmetic: exact for any two int64 times,
+    // so a corrupt stamp far away cannot wrap around into "fresh".
+    uint64_t dist = t_us > last ? uint64_t(t_us) - uint64_t(last) : uint64_t(last) - uint64_t(t_us);
+    if (dist > uint64_t(max_age_us))
+        return LOADID_E_STALE;
+    return 0;
+}
+
+int kinematics_of(const loadid_signals *s, const loadid_jf_t *jf, int64_t t_us,
+                  loadid_kin_state_t *out) {
+    loadid_real_t q[LOADID_MAX_JOINTS], qd[LOADID_MAX_JOINTS], qdd[LOADID_MAX_JOINTS];
+    int rc = loadid_jf_state_at(jf, t_us, q, qd, qdd);
+    if (rc != 0) return rc;
+    return loadid_kin_eval(s->kin, q, qd, qdd, out);
+}
+
+void copy3(loadid_real_t dst[3], const loadid_real_t src[3]) {
+    std::memcpy(dst, src, 3 * sizeof *dst);
+}
+
+void motion_of(const loadid_kin_state_t &k, loadid_regressor_input_t &m) {
+    copy3(m.spec, k.spec);
+    copy3(m.omega, k.omega);
+    copy3(m.alpha, k.alpha);
+}
+
+// Counts a refusal by its cause and passes the code on.
+int refuse(loadid_signals *s, int rc) {
+    if (rc == LOADID_E_NO_DATA)
+        ++s->stats.samples_no_joints;
+    else if (rc == LOADID_E_STALE)
+        ++s->stats.samples_stale;
+    else
+        ++s->stats.samples_bad;
+    return rc;
+}
+
+}  // namespace
+
+extern "C" int loadid_signal_source_parse(const char *name, loadid_signal_source_t *out) {
+    if (!name || !out) return -EINVAL;
+    for (int i = LOADID_SIGNALS_SENSOR; i <= LOADID_SIGNALS_MIXED; ++i) {
+        if (std::strcmp(name, kNames[i]) == 0) {
+            *out = static_cast<loadid_signal_source_t>(i);
+            return 0;
+        }
+    }
+    return -EINVAL;
+}
+
+extern "C" const char *loadid_signal_source_name(loadid_signal_source_t source) {
+    const int v = enum_value(source);
+    return valid_source(v) ? kNames[v] : nullptr;
+}
+
+extern "C" int loadid_signals_config_default(loadid_signals_config_t *cfg) {
+    if (!cfg) return -EINVAL;
+    std::memset(cfg, 0, sizeof *cfg);
+    cfg->source = LOADID_SIGNALS_MIXED;
+    loadid_jf_config_default(&cfg->measured);
+    loadid_jf_config_default(&cfg->setpoint);
+    cfg->max_joint_age_us = 5000;
+    return 0;
+}
+
+extern "C" int loadid_signals_create(const loadid_chain_t *chain, const double gravity[3],
+                                     const loadid_signals_config_t *cfg, loadid_signals_t **out) {
+    if (!chain || !gravity || !cfg || !out) return -EINVAL;
+    if (!valid_source(enum_value(cfg->source)) || cfg->max_joint_age_us < 0) return -EINVAL;
+    auto *s = new (std::nothrow) loadid_signals{};
+    if (!s) return -ENOMEM;
+    s->cfg = *cfg;
+    int rc = loadid_kin_create(chain, gravity, &s->kin);
+    if (rc == 0) rc = loadid_jf_create(chain->num_joints, &cfg->measured, &s->measured);
+    if (rc == 0) rc = loadid_jf_create(chain->num_joints, &cfg->setpoint, &s->setpoint);
+    if (rc != 0) {
+        destroy(s);
+        return rc;
+    }
+    s->n = chain->num_joints;
+    *out = s;
+    return 0;
+}
+
+extern "C" void loadid_signals_destroy(loadid_signals_t *s) {
+    if (s) destroy(s);
+}
+
+extern "C" int loadid_signals_reset(loadid_signals_t *s) {
+    if (!s) return -EINVAL;
+    loadid_jf_reset(s->measured);
+    loadid_jf_reset(s->setpoint);
+    s->stats = loadid_signals_stats_t{};
+    return 0;
+}
+
+extern "C" int loadid_signals_num_joints(const loadid_signals_t *s) { return s ? s->n : -EINVAL; }
+
+extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int num_joints,
+                                          const loadid_real_t *position,
+                                          const loadid_real_t *setpoint) {
+    if (!s) return -EINVAL;
+    int rc = 0;
+    // Everything is checked before either filter changes, so a refused
+    // message leaves both exactly as they were.
+    if (num_joints != s->n || !position)
+        rc = -EBADMSG;
+    else if (!all_finite(position, s->n) || (setpoint && !all_finite(setpoint, s->n)))
+        rc = LOADID_E_NONFINITE;
+    else if (t_us <= loadid_jf_last_time(s->measured) ||
+             (setpoint && t_us <= loadid_jf_last_time(s->setpoint)))
+        rc = LOADID_E_TIME_ORDER;
+    if (rc == 0) rc = loadid_jf_update(s->measured, t_us, position);
+    if (rc == 0 && setpoint) rc = loadid_jf_update(s->setpoint, t_us, setpoint);
+    if (rc != 0) {
+        ++s->stats.joint_msgs_bad;
+        return rc;
+    }
+    ++s->stats.joint_msgs_ok;
+    return 0;
+}
+
+extern "C" int loadid_signals_at(loadid_signals_t *s, int64_t t_us,
+                                 const loadid_real_t jr3_spec[3],
+                                 const loadid_real_t jr3_alpha[3],
+                                 const loadid_real_t *exact_setpoint, loadid_regressor_input_t *motion,
+                                 loadid_regressor_input_t *instruments) {
+    if (!s) return -EINVAL;
+    const loadid_signal_source_t src = s->cfg.source;
+    const bool uses_jr3 = src == LOADID_SIGNALS_SENSOR || src == LOADID_SIGNALS_MIXED;
+    const bool uses_measured = src != LOADID_SIGNALS_SETPOINT;
+    const bool uses_setpoint = src == LOADID_SIGNALS_SETPOINT || instruments;
+    if (uses_jr3 && (!jr3_spec || (src == LOADID_SIGNALS_SENSOR && !jr3_alpha))) return -EINVAL;
+    if (uses_jr3 && (!all_finite(jr3_spec, 3) ||
+                     (src == LOADID_SIGNALS_SENSOR && !all_finite(jr3_alpha, 3))))
+        return refuse(s, LOADID_E_NONFINITE);
+    if (exact_setpoint && !all_finite(exact_setpoint, 3 * s->n))
+        return refuse(s, LOADID_E_NONFINITE);
+
+    int rc = 0;
+    loadid_kin_state_t meas{}, set{};
+    if (uses_measured) {
+        rc = stream_ready(s->measured, t_us, s->cfg.max_joint_age_us);
+        if (rc == 0) rc = kinematics_of(s, s->measured, t_us, &meas);
+        if (rc != 0) return refuse(s, rc);
+    }
+    if (uses_setpoint) {
+        if (exact_setpoint) {
+            rc = loadid_kin_eval(s->kin, exact_setpoint, exact_setpoint + s->n,
+                                 exact_setpoint + 2 * s->n, &set);
+        } else {
+            rc = stream_ready(s->setpoint, t_us, s->cfg.max_joint_age_us);
+            if (rc == 0) rc = kinematics_of(s, s->setpoint, t_us, &set);
+        }
+        if (rc != 0) return refuse(s, rc);
+    }
+
+    if (motion) {
+        switch (src) {
+            case LOADID_SIGNALS_SENSOR:
+                copy3(motion->spec, jr3_spec);
+                copy3(motion->omega, meas.omega);
+                copy3(motion->alpha, jr3_alpha);
+                break;
+            case LOADID_SIGNALS_KF: motion_of(meas, *motion); break;
+            case LOADID_SIGNALS_SETPOINT: motion_of(set, *motion); break;
+            case LOADID_SIGNALS_MIXED:
+                copy3(motion->spec, jr3_spec);
+                copy3(motion->omega, meas.omega);
+                copy3(motion->alpha, meas.alpha);
+                break;
+        }
+    }
+    if (instruments) motion_of(set, *instruments);
+    ++s->stats.samples_ok;
+    return 0;
+}
+
+extern "C" int loadid_signals_kinematics_at(const loadid_signals_t *s, int64_t t_us,
+                                            loadid_kin_state_t *state) {
+    if (!s || !state) return -EINVAL;
+    int rc = stream_ready(s->measured, t_us, s->cfg.max_joint_age_us);
+    return rc != 0 ? rc : kinematics_of(s, s->measured, t_us, state);
+}
+
+extern "C" int loadid_signals_stats(const loadid_signals_t *s, loadid_signals_stats_t *stats) {
+    if (!s || !stats) return -EINVAL;
+    *stats = s->stats;
+    return 0;
+}

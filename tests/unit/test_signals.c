@@ -1,0 +1,326 @@
+/*
+ * Unit tests of the signal sources and the time alignment
+ * (loadid/signals.h): which quantity each source takes from where, the
+ * evaluation of the joint filters at the sensor sample's time, and the
+ * refusal and counting of stale, missing and bad input.
+ *
+ * The joint trajectories here are quadratic in time (constant q''): the
+ * filters' model then holds exactly, their estimate converges to the true
+ * state, and the reference is the forward kinematics evaluated at the
+ * analytic q, q', q'' of the sample's time (the kinematics themselves are
+ * checked against closed forms, finite differences and Pinocchio in
+ * test_kinematics.c and tests/python).
+ */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "loadid/core.h"
+#include "random_util.h"
+
+_Static_assert(sizeof(loadid_real_t) == sizeof(double), "these tests link the double core");
+
+#define NJ 3
+static const double kGravity[3] = {0, 0, -9.81};
+
+/* A 3-joint arm: revolute z, revolute y, prismatic x, then S. */
+static void test_chain(loadid_chain_t *c) {
+    static const double id[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    static const double xyz[NJ][3] = {{0, 0, 0.3}, {0.1, 0, 0.2}, {0.25, 0.05, 0}};
+    static const double axis[NJ][3] = {{0, 0, 1}, {0, 1, 0}, {1, 0, 0}};
+    memset(c, 0, sizeof *c);
+    strcpy(c->base_link, "base");
+    strcpy(c->sensor_link, "sensor");
+    c->num_joints = NJ;
+    for (int i = 0; i < NJ; ++i) {
+        loadid_joint_desc_t *j = &c->joints[i];
+        snprintf(j->name, sizeof j->name, "j%d", i + 1);
+        j->type = i == 2 ? LOADID_JOINT_PRISMATIC : LOADID_JOINT_REVOLUTE;
+        memcpy(j->origin_xyz, xyz[i], sizeof j->origin_xyz);
+        memcpy(j->origin_rot, id, sizeof id);
+        memcpy(j->axis, axis[i], sizeof j->axis);
+        j->lower = -INFINITY, j->upper = INFINITY, j->velocity = INFINITY;
+    }
+    memcpy(c->tip_rot, id, sizeof id);
+    c->tip_xyz[2] = 0.05;
+}
+
+/* q(t) = q0 + v t + a t^2 / 2, t in seconds. */
+typedef struct {
+    double q0[NJ], v[NJ], a[NJ];
+} quad_t;
+
+static const quad_t kMeasured = {{0.2, -0.4, 0.05}, {0.5, -0.3, 0.1}, {1.5, -2.0, 0.4}};
+static const quad_t kSetpoint = {{0.21, -0.38, 0.06}, {0.45, -0.2, 0.12}, {1.2, -1.5, 0.3}};
+
+static void quad_at(const quad_t *p, double t, loadid_real_t out[3 * NJ]) {
+    for (int i = 0; i < NJ; ++i) {
+        out[i] = p->q0[i] + p->v[i] * t + p->a[i] * t * t / 2;
+        out[NJ + i] = p->v[i] + p->a[i] * t;
+        out[2 * NJ + i] = p->a[i];
+    }
+}
+
+static double seconds(int64_t t_us) { return (double)t_us * 1e-6; }
+
+/* Pushes joint states every 1000 us over [from, to), both streams. */
+static void push_range(loadid_signals_t *s, int64_t from, int64_t to) {
+    for (int64_t t = from; t < to; t += 1000) {
+        loadid_real_t m[3 * NJ], sp[3 * NJ];
+        quad_at(&kMeasured, seconds(t), m);
+        quad_at(&kSetpoint, seconds(t), sp);
+        assert_int_equal(loadid_signals_push_joints(s, t, NJ, m, sp), 0);
+    }
+}
+
+static loadid_signals_t *make(loadid_signal_source_t source) {
+    loadid_chain_t chain;
+    test_chain(&chain);
+    loadid_signals_config_t cfg;
+    assert_int_equal(loadid_signals_config_default(&cfg), 0);
+    cfg.source = source;
+    loadid_signals_t *s = NULL;
+    assert_int_equal(loadid_signals_create(&chain, kGravity, &cfg, &s), 0);
+    assert_int_equal(loadid_signals_num_joints(s), NJ);
+    return s;
+}
+
+/* The forward kinematics of the analytic state of p at time t. */
+static loadid_kin_state_t truth_at(const quad_t *p, double t) {
+    loadid_chain_t chain;
+    test_chain(&chain);
+    loadid_kin_t *kin = NULL;
+    assert_int_equal(loadid_kin_create(&chain, kGravity, &kin), 0);
+    loadid_real_t x[3 * NJ];
+    quad_at(p, t, x);
+    loadid_kin_state_t st;
+    assert_int_equal(loadid_kin_eval(kin, x, x + NJ, x + 2 * NJ, &st), 0);
+    loadid_kin_destroy(kin);
+    return st;
+}
+
+static void assert_vec(const loadid_real_t *got, const loadid_real_t *want, double tol,
+                       const char *what) {
+    for (int i = 0; i < 3; ++i) ASSERT_CLOSE(got[i], want[i], tol, what);
+}
+
+static const loadid_real_t kJr3Spec[3] = {0.5, -1.25, 9.0};
+static const loadid_real_t kJr3Alpha[3] = {3.0, -7.0, 11.0};
+
+/* Converged filters, at a sensor time between two joint states: each
+ * source takes each quantity from where the paper's Fig. 9 says. */
+static void sources_take_each_quantity_from_their_input(void **state) {
+    (void)state;
+    const int64_t t_sample = 2000300; /* 0.3 ms after the last joint state */
+    loadid_kin_state_t meas = truth_at(&kMeasured, seconds(t_sample));
+    loadid_kin_state_t set = truth_at(&kSetpoint, seconds(t_sample));
+    const double tol = 1e-6; /* converged filter on an exact model */
+    for (int src = LOADID_SIGNALS_SENSOR; src <= LOADID_SIGNALS_MIXED; ++src) {
+        loadid_signals_t *s = make((loadid_signal_source_t)src);
+        push_range(s, 0, 2001000);
+        loadid_regressor_input_t m, instr;
+        assert_int_equal(loadid_signals_at(s, t_sample, kJr3Spec, kJr3Alpha, NULL, &m, &instr), 0);
+        const loadid_real_t *spec = NULL, *omega = NULL, *alpha = NULL;
+        switch (src) {
+            case LOADID_SIGNALS_SENSOR: spec = kJr3Spec, omega = meas.omega, alpha = kJr3Alpha; break;
+            case LOADID_SIGNALS_KF: spec = meas.spec, omega = meas.omega, alpha = meas.alpha; break;
+            case LOADID_SIGNALS_SETPOINT: spec = set.spec, omega = set.omega, alpha = set.alpha; break;
+            case LOADID_SIGNALS_MIXED: spec = kJr3Spec, omega = meas.omega, alpha = meas.alpha; break;
+        }
+        assert_vec(m.spec, spec, tol, "spec");
+        assert_vec(m.omega, omega, tol, "omega");
+        assert_vec(m.alpha, alpha, tol, "alpha");
+        /* RIV's instruments come from the setpoints whatever the source. */
+        assert_vec(instr.spec, set.spec, tol, "instrument spec");
+        assert_vec(instr.omega, set.omega, tol, "instrument omega");
+        assert_vec(instr.alpha, set.alpha, tol, "instrument alpha");
+
+        /* Gravity in S at the sample time (g_init of eq. 7 at zeroing). */
+        loadid_kin_state_t k;
+        assert_int_equal(loadid_signals_kinematics_at(s, t_sample, &k), 0);
+        assert_vec(k.gravity, meas.gravity, 1e-9, "gravity in S");
+
+        loadid_signals_stats_t st;
+        assert_int_equal(loadid_signals_stats(s, &st), 0);
+        assert_int_equal(st.joint_msgs_ok, 2001);
+        assert_int_equal(st.samples_ok, 1);
+        assert_int_equal(st.joint_msgs_bad + st.samples_stale + st.samples_no_joints + st.samples_bad, 0);
+        loadid_signals_destroy(s);
+    }
+}
+
+/* A known trajectory's exact derivatives replace the setpoint filter; no
+ * setpoint needs to have arrived. */
+static void exact_setpoint_is_used_as_given(void **state) {
+    (void)state;
+    loadid_signals_t *s = make(LOADID_SIGNALS_SETPOINT);
+    loadid_real_t m[3 * NJ];
+    quad_at(&kMeasured, 0, m);
+    assert_int_equal(loadid_signals_push_joints(s, 0, NJ, m, NULL), 0);
+    loadid_real_t exact[3 * NJ];
+    quad_at(&kSetpoint, 0.0007, exact);
+    loadid_regressor_input_t mo, instr;
+    assert_int_equal(loadid_signals_at(s, 700, NULL, NULL, exact, &mo, &instr), 0);
+    loadid_kin_state_t set = truth_at(&kSetpoint, 0.0007);
+    assert_memory_equal(mo.spec, set.spec, sizeof mo.spec);
+    assert_memory_equal(mo.alpha, set.alpha, sizeof mo.alpha);
+    assert_memory_equal(instr.omega, set.omega, sizeof instr.omega);
+    /* Without them, the setpoint stream has never been seen. */
+    assert_int_equal(loadid_signals_at(s, 700, NULL, NULL, NULL, &mo, NULL), LOADID_E_NO_DATA);
+    loadid_signals_destroy(s);
+}
+
+/* The filters' state predicted to the sample's time, on either side of
+ * the newest joint state, matches the truth at that time, not at the
+ * joint state's. */
+static void samples_are_aligned_to_their_own_time(void **state) {
+    (void)state;
+    loadid_signals_t *s = make(LOADID_SIGNALS_KF);
+    push_range(s, 0, 3001000); /* newest at 3.000 s */
+    for (int64_t dt = -900; dt <= 4900; dt += 700) {
+        int64_t t = 3000000 + dt;
+        loadid_regressor_input_t m;
+        assert_int_equal(loadid_signals_at(s, t, NULL, NULL, NULL, &m, NULL), 0);
+        loadid_kin_state_t want = truth_at(&kMeasured, seconds(t));
+        assert_vec(m.omega, want.omega, 1e-6, "omega at sample time");
+        assert_vec(m.spec, want.spec, 1e-5, "spec at sample time");
+    }
+    loadid_signals_destroy(s);
+}
+
+static void stale_and_missing_joints_are_refused_and_counted(void **state) {
+    (void)state;
+    loadid_signals_t *s = make(LOADID_SIGNALS_MIXED);
+    loadid_regressor_input_t m, untouched;
+    memset(&m, 0x5a, sizeof m);
+    memcpy(&untouched, &m, sizeof m);
+    assert_int_equal(loadid_signals_at(s, 1000, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_NO_DATA);
+    push_range(s, 0, 11000); /* newest at 10 ms; max age 5 ms */
+    assert_int_equal(loadid_signals_at(s, 15000, kJr3Spec, NULL, NULL, &m, NULL), 0);
+    assert_int_equal(loadid_signals_at(s, 15001, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_STALE);
+    memcpy(&untouched, &m, sizeof m);
+    assert_int_equal(loadid_signals_at(s, 4999, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_STALE);
+    assert_int_equal(loadid_signals_at(s, INT64_MIN + 1, kJr3Spec, NULL, NULL, &m, NULL),
+                     LOADID_E_STALE);
+    assert_int_equal(loadid_signals_at(s, INT64_MAX, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_STALE);
+    assert_memory_equal(&m, &untouched, sizeof m);
+    /* RIV's instruments need setpoints: a stream without them is refused. */
+    loadid_signals_reset(s);
+    loadid_real_t q[3 * NJ];
+    quad_at(&kMeasured, 0, q);
+    assert_int_equal(loadid_signals_push_joints(s, 0, NJ, q, NULL), 0);
+    loadid_regressor_input_t instr;
+    assert_int_equal(loadid_signals_at(s, 0, kJr3Spec, NULL, NULL, &m, &instr), LOADID_E_NO_DATA);
+    assert_int_equal(loadid_signals_at(s, 0, kJr3Spec, NULL, NULL, &m, NULL), 0);
+
+    loadid_signals_stats_t st;
+    loadid_signals_stats(s, &st);
+    assert_int_equal(st.samples_no_joints, 1);
+    assert_int_equal(st.samples_ok, 1);
+    loadid_signals_destroy(s);
+
+    s = make(LOADID_SIGNALS_MIXED);
+    assert_int_equal(loadid_signals_at(s, 0, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_NO_DATA);
+    push_range(s, 0, 11000);
+    assert_int_equal(loadid_signals_at(s, 15001, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_STALE);
+    assert_int_equal(loadid_signals_at(s, 4999, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_STALE);
+    loadid_signals_stats(s, &st);
+    assert_int_equal(st.samples_no_joints, 1);
+    assert_int_equal(st.samples_stale, 2);
+    assert_int_equal(st.samples_ok, 0);
+    loadid_signals_destroy(s);
+}
+
+/* Every refused joint message or sample is counted and changes nothing. */
+static void bad_joint_messages_and_samples_change_nothing(void **state) {
+    (void)state;
+    loadid_signals_t *s = make(LOADID_SIGNALS_SENSOR);
+    push_range(s, 0, 500000);
+    loadid_regressor_input_t before, after;
+    assert_int_equal(loadid_signals_at(s, 499500, kJr3Spec, kJr3Alpha, NULL, &before, NULL), 0);
+
+    loadid_real_t q[3 * NJ], bad[3 * NJ];
+    quad_at(&kMeasured, 0.5, q);
+    memcpy(bad, q, sizeof q);
+    bad[1] = NAN;
+    assert_int_equal(loadid_signals_push_joints(s, 500000, NJ - 1, q, q), -EBADMSG);
+    assert_int_equal(loadid_signals_push_joints(s, 500000, NJ, NULL, q), -EBADMSG);
+    assert_int_equal(loadid_signals_push_joints(s, 500000, NJ, bad, q), LOADID_E_NONFINITE);
+    assert_int_equal(loadid_signals_push_joints(s, 500000, NJ, q, bad), LOADID_E_NONFINITE);
+    assert_int_equal(loadid_signals_push_joints(s, 499000, NJ, q, q), LOADID_E_TIME_ORDER);
+    assert_int_equal(loadid_signals_push_joints(s, 400000, NJ, q, q), LOADID_E_TIME_ORDER);
+    assert_int_equal(loadid_signals_at(s, 499500, kJr3Spec, kJr3Alpha, NULL, &after, NULL), 0);
+    assert_memory_equal(&before, &after, sizeof before);
+
+    loadid_real_t nan3[3] = {0, NAN, 0};
+    assert_int_equal(loadid_signals_at(s, 499500, nan3, kJr3Alpha, NULL, &after, NULL),
+                     LOADID_E_NONFINITE);
+    assert_int_equal(loadid_signals_at(s, 499500, kJr3Spec, nan3, NULL, &after, NULL),
+                     LOADID_E_NONFINITE);
+    assert_int_equal(loadid_signals_at(s, 499500, kJr3Spec, NULL, NULL, &after, NULL), -EINVAL);
+    assert_memory_equal(&before, &after, sizeof before);
+
+    loadid_signals_stats_t st;
+    loadid_signals_stats(s, &st);
+    assert_int_equal(st.joint_msgs_ok, 500);
+    assert_int_equal(st.joint_msgs_bad, 6);
+    assert_int_equal(st.samples_bad, 2);
+    assert_int_equal(st.samples_ok, 2);
+    assert_int_equal(loadid_signals_reset(s), 0);
+    loadid_signals_stats(s, &st);
+    assert_int_equal(st.joint_msgs_ok + st.joint_msgs_bad + st.samples_ok + st.samples_bad, 0);
+    assert_int_equal(loadid_signals_at(s, 499500, kJr3Spec, kJr3Alpha, NULL, &after, NULL),
+                     LOADID_E_NO_DATA);
+    loadid_signals_destroy(s);
+}
+
+static void source_names_and_bad_configs(void **state) {
+    (void)state;
+    const char *names[] = {"sensor", "kf", "setpoint", "mixed"};
+    for (int i = 0; i < 4; ++i) {
+        loadid_signal_source_t src;
+        assert_int_equal(loadid_signal_source_parse(names[i], &src), 0);
+        assert_int_equal(src, i + 1);
+        assert_string_equal(loadid_signal_source_name(src), names[i]);
+    }
+    loadid_signal_source_t src;
+    assert_int_equal(loadid_signal_source_parse("Mixed", &src), -EINVAL);
+    assert_int_equal(loadid_signal_source_parse("", &src), -EINVAL);
+    assert_null(loadid_signal_source_name((loadid_signal_source_t)0));
+
+    loadid_chain_t chain;
+    test_chain(&chain);
+    loadid_signals_config_t cfg;
+    loadid_signals_config_default(&cfg);
+    assert_int_equal(cfg.source, LOADID_SIGNALS_MIXED);
+    loadid_signals_t *s = NULL;
+    cfg.source = (loadid_signal_source_t)9;
+    assert_int_equal(loadid_signals_create(&chain, kGravity, &cfg, &s), -EINVAL);
+    loadid_signals_config_default(&cfg);
+    cfg.max_joint_age_us = -1;
+    assert_int_equal(loadid_signals_create(&chain, kGravity, &cfg, &s), -EINVAL);
+    loadid_signals_config_default(&cfg);
+    cfg.measured.meas_sigma = 0;
+    assert_int_equal(loadid_signals_create(&chain, kGravity, &cfg, &s), -EINVAL);
+    assert_null(s);
+    loadid_signals_destroy(NULL);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(sources_take_each_quantity_from_their_input),
+        cmocka_unit_test(exact_setpoint_is_used_as_given),
+        cmocka_unit_test(samples_are_aligned_to_their_own_time),
+        cmocka_unit_test(stale_and_missing_joints_are_refused_and_counted),
+        cmocka_unit_test(bad_joint_messages_and_samples_change_nothing),
+        cmocka_unit_test(source_names_and_bad_configs),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
