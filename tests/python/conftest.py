@@ -34,6 +34,8 @@ from __future__ import annotations
 import ctypes
 import os
 import pathlib
+import shutil
+import subprocess
 
 import numpy as np
 import pytest
@@ -73,6 +75,33 @@ METHOD_NAMES = {
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[2]
 INCLUDE_DIR = REPO_ROOT / "firmware" / "include"
+
+
+def assert_layout_matches_c(tmp_path, header, structs):
+    """Compiles a C program that prints sizeof and every field's offsetof for
+    each (C name, ctypes mirror) in structs, and asserts the mirrors agree
+    field by field. Skips when there is no C compiler."""
+    cc = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+    if cc is None:
+        pytest.skip("no C compiler to read offsetof() from")
+    lines = ['#include <stdio.h>', '#include <stddef.h>', f'#include "{header}"',
+             "int main(void) {"]
+    for cname, py in structs:
+        lines.append(f'printf("%zu\\n", sizeof({cname}));')
+        lines += [f'printf("%zu\\n", offsetof({cname}, {f}));' for f, _ in py._fields_]
+    lines += ["return 0; }"]
+    src = tmp_path / "layout.c"
+    src.write_text("\n".join(lines))
+    exe = tmp_path / "layout"
+    subprocess.run([cc, "-std=c11", f"-I{INCLUDE_DIR}", "-DLOADID_SCALAR_FLOAT=0", str(src),
+                    "-o", str(exe)], check=True, capture_output=True)
+    out = [int(x) for x in
+           subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout.split()]
+    expected = []
+    for _, py in structs:
+        expected.append(ctypes.sizeof(py))
+        expected += [getattr(py, f).offset for f, _ in py._fields_]
+    assert out == expected
 
 real_t = ctypes.c_double  # loadid_real_t in the double build
 real_p = ctypes.POINTER(real_t)

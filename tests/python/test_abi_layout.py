@@ -6,14 +6,11 @@ available, and against the documented defaults of loadid_est_config_default()
 from __future__ import annotations
 
 import ctypes
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
 
 from conftest import (
-    INCLUDE_DIR,
     LIB,
     LOADID_MAX_PARAMS,
     METHOD_NAMES,
@@ -22,6 +19,7 @@ from conftest import (
     Estimator,
     LoadidEstConfig,
     LoadidEstInfo,
+    assert_layout_matches_c,
     config_default,
 )
 
@@ -30,27 +28,9 @@ INFO_FIELDS = [name for name, _ in LoadidEstInfo._fields_]
 
 
 def test_struct_layout_matches_c_compiler(tmp_path):
-    cc = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
-    if cc is None:
-        pytest.skip("no C compiler to read offsetof() from")
-    lines = ['#include <stdio.h>', '#include <stddef.h>', '#include "loadid/estimator.h"',
-             "int main(void) {",
-             'printf("%zu %zu\\n", sizeof(loadid_est_config_t), sizeof(loadid_est_info_t));']
-    lines += [f'printf("%zu\\n", offsetof(loadid_est_config_t, {f}));' for f in CFG_FIELDS]
-    lines += [f'printf("%zu\\n", offsetof(loadid_est_info_t, {f}));' for f in INFO_FIELDS]
-    lines += ["return 0; }"]
-    src = tmp_path / "layout.c"
-    src.write_text("\n".join(lines))
-    exe = tmp_path / "layout"
-    subprocess.run([cc, "-std=c11", f"-I{INCLUDE_DIR}", "-DLOADID_SCALAR_FLOAT=0", str(src),
-                    "-o", str(exe)], check=True, capture_output=True)
-    out = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout.split()
-    sizes = [int(out[0]), int(out[1])]
-    offs = [int(x) for x in out[2:]]
-    assert sizes == [ctypes.sizeof(LoadidEstConfig), ctypes.sizeof(LoadidEstInfo)]
-    expected = [getattr(LoadidEstConfig, f).offset for f in CFG_FIELDS] + \
-               [getattr(LoadidEstInfo, f).offset for f in INFO_FIELDS]
-    assert offs == expected
+    assert_layout_matches_c(tmp_path, "loadid/estimator.h",
+                            [("loadid_est_config_t", LoadidEstConfig),
+                             ("loadid_est_info_t", LoadidEstInfo)])
 
 
 @pytest.mark.parametrize("n_params", [10, 16])

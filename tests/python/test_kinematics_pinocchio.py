@@ -32,7 +32,6 @@ import ctypes
 import errno
 import math
 import re
-import shutil
 import subprocess
 import sys
 import time
@@ -43,7 +42,6 @@ import pinocchio as pin
 import pytest
 
 from conftest import (
-    INCLUDE_DIR,
     LOADID_E_MODEL,
     LOADID_E_NONFINITE,
     LOADID_JOINT_PRISMATIC,
@@ -51,6 +49,7 @@ from conftest import (
     LoadidChain,
     LoadidJointDesc,
     LoadidKinState,
+    assert_layout_matches_c,
     Kinematics,
     REPO_ROOT,
     chain_check,
@@ -262,29 +261,10 @@ def loaded(urdf_lib):
 # ABI: the ctypes mirrors match the headers
 # --------------------------------------------------------------------------
 def test_struct_layout_matches_c_compiler(tmp_path):
-    cc = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
-    if cc is None:
-        pytest.skip("no C compiler to read offsetof() from")
-    structs = [("loadid_joint_desc_t", LoadidJointDesc), ("loadid_chain_t", LoadidChain),
-               ("loadid_kin_state_t", LoadidKinState)]
-    lines = ['#include <stdio.h>', '#include <stddef.h>', '#include "loadid/kinematics.h"',
-             "int main(void) {"]
-    for cname, py in structs:
-        lines.append(f'printf("%zu\\n", sizeof({cname}));')
-        lines += [f'printf("%zu\\n", offsetof({cname}, {f}));' for f, _ in py._fields_]
-    lines += ["return 0; }"]
-    src = tmp_path / "layout.c"
-    src.write_text("\n".join(lines))
-    exe = tmp_path / "layout"
-    subprocess.run([cc, "-std=c11", f"-I{INCLUDE_DIR}", "-DLOADID_SCALAR_FLOAT=0", str(src),
-                    "-o", str(exe)], check=True, capture_output=True)
-    out = [int(x) for x in
-           subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout.split()]
-    expected = []
-    for _, py in structs:
-        expected.append(ctypes.sizeof(py))
-        expected += [getattr(py, f).offset for f, _ in py._fields_]
-    assert out == expected
+    assert_layout_matches_c(tmp_path, "loadid/kinematics.h",
+                            [("loadid_joint_desc_t", LoadidJointDesc),
+                             ("loadid_chain_t", LoadidChain),
+                             ("loadid_kin_state_t", LoadidKinState)])
 
 
 # --------------------------------------------------------------------------
