@@ -22,6 +22,8 @@ DEBIAN_PACKAGES=(
   libeigen3-dev libcmocka-dev
   # the robot model: URDF reader (kinematics of the sensor frame)
   liburdfdom-dev
+  # the configuration (YAML, libyaml) and the trajectory designer's optimiser (NLopt)
+  libyaml-dev libnlopt-dev
   # the Debian Python that makes build/venv (its packages come from PyPI)
   python3 python3-venv
   # HTTPS to PyPI for pip, and git for working in the clone

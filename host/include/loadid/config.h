@@ -1,0 +1,155 @@
+/*
+ * The configuration file (DESIGN.md, "The command-line and configuration
+ * contract"): one YAML file, read with libyaml into loadid_config_t. The
+ * keys of DESIGN.md are fixed; the sections marked "loadid" below are this
+ * project's additions. Keys left out take the defaults given here. Relative
+ * paths are relative to the directory of the configuration file.
+ *
+ * Every error names the file, the line and the key, e.g.
+ *   "cfg.yaml:12: jr3.full_scale.force: expected 3 numbers, got 2"
+ * An unknown key is not an error (other programs may share the file) but
+ * is reported through the warning callback with its file and line:
+ *   "cfg.yaml:40: trajectory.harmonic: unknown key, ignored"
+ *
+ * Where DESIGN.md is silent:
+ *   - An empty file (or one with only comments) gives every default, with a
+ *     warning "FILE:1: (top level): empty configuration, ...". A section
+ *     with no keys ("robot:" alone, or with every key commented out) is the
+ *     same as a section left out. A key with no value is an error.
+ *   - Numbers are plain YAML numbers (integers accepted where a real is
+ *     expected); .nan and .inf are refused; a quoted "1.5" is a string.
+ *     Integers may be hexadecimal (base_id: 0x1A0, seeds).
+ *   - Method and source names are case-sensitive, as DESIGN.md spells them.
+ *   - robot.urdf is made absolute (a relative config path is taken against
+ *     the working directory at load), so it survives a chdir; it is not
+ *     checked for existence here (the URDF reader reports that).
+ *   - A file of several YAML documents, aliases (*name) and duplicate keys
+ *     are errors (host/src/yaml_tree.h).
+ */
+#ifndef LOADID_CONFIG_H
+#define LOADID_CONFIG_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "loadid/chain.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define LOADID_PATH_MAX 4096
+#define LOADID_MAX_METHODS 5
+
+typedef struct {
+    /* robot: (DESIGN.md) */
+    char robot_urdf[LOADID_PATH_MAX];   /* resolved path; default: the shipped
+                                           host/config/robots/rx60.urdf */
+    char robot_base_link[LOADID_NAME_MAX];   /* default "base_link" */
+    char robot_sensor_link[LOADID_NAME_MAX]; /* default "ft_sensor" */
+    double robot_gravity[3];            /* default [0 0 -9.81] */
+
+    /* can: */
+    char can_interface[32];             /* default "vcan0" */
+    uint32_t can_base_id;               /* default 0x1A0; 11-bit, base+4 <= 0x7FF */
+
+    /* jr3.full_scale: value = counts * full_scale / 16384 */
+    double jr3_fs_force[3];             /* default 200 N */
+    double jr3_fs_moment[3];            /* default 12 N m */
+    double jr3_fs_linear[3];            /* default 98.1 m/s^2 */
+    double jr3_fs_angular[3];           /* default 1000 rad/s^2 */
+
+    /* lcm: */
+    char lcm_url[256];                  /* default udpm://239.255.76.67:7667?ttl=0 */
+
+    /* estimation: */
+    int num_methods;                    /* default 3: RTLS, RIV, RLS */
+    int methods[LOADID_MAX_METHODS];    /* loadid_method_t values, in file order */
+    int signals;                        /* loadid_signal_source_t; default MIXED */
+    int offset_model_estimate;          /* 0: "zeroing" (default), 1: "estimate" */
+    double duration_s;                  /* default 1.5 */
+
+    /* zeroing: */
+    double zeroing_window_s;            /* default 0.2 */
+
+    /* distal: */
+    double distal_phi[10];              /* default 0 */
+
+    /* noise: (loadid) standard deviations of the measurements, for the
+     * estimators' weights (loadid_est_weights_from_noise) and the
+     * trajectory designer's column scaling */
+    double noise_force;                 /* [N], default 0.1 */
+    double noise_torque;                /* [N m], default 0.005 */
+    double noise_linear;                /* a - g [m/s^2], default 0.5 */
+    double noise_angular;               /* alpha [rad/s^2], default 5 */
+    double noise_omega;                 /* [rad/s], default 0.02 */
+    double omega_typical;               /* [rad/s], default 2 */
+
+    /* kalman: (loadid) the joint filters (loadid/joint_filter.h) */
+    double kalman_jerk_psd;             /* default: loadid_jf_config_default */
+    double kalman_meas_sigma;           /* default: loadid_jf_config_default */
+    double kalman_max_joint_age_s;      /* default 0.005 */
+
+    /* trajectory: (loadid) the excitation designer, loadid-traj */
+    double traj_base_frequency;         /* f of eq. (10) [Hz], default 0.5 */
+    int traj_harmonics;                 /* N of eq. (10), default 4 */
+    double traj_max_frequency;          /* highest allowed harmonic [Hz], default 2 */
+    double traj_active_s;               /* active part, default 1.5 */
+    double traj_fade_s;                 /* each fade (eqs. 14-15), default 0.5 */
+    int traj_has_home;                  /* 1 when trajectory.home is given */
+    int traj_num_home;                  /* values in traj_home (1..16), 0 if not given */
+    double traj_home[LOADID_MAX_JOINTS];/* q_0 of eq. (11) [rad or m], one per
+                                           joint; default mid-range */
+    int traj_num_acc_limits;            /* 0 (traj_acc_limit holds one value for
+                                           every joint: the default, or a single
+                                           number "acc_limit: 15"), or the count of
+                                           the list "acc_limit: [...]" */
+    double traj_acc_limit[LOADID_MAX_JOINTS]; /* [rad/s^2 or m/s^2] > 0; default 20 */
+    double traj_vel_scale;              /* fraction of the URDF velocity
+                                           limits used, (0, 1], default 1 */
+    double traj_workspace_min[3];       /* box the sensor origin stays in,
+                                           base frame [m]; default -1e9 */
+    double traj_workspace_max[3];       /* default +1e9 */
+    double traj_floor_z;                /* floor plane z >= floor_z + clearance,
+                                           base frame [m]; default -1e9 */
+    double traj_floor_clearance;        /* [m], default 0.05 */
+    int traj_monte_carlo;               /* random candidates, default 2000 */
+    int traj_candidates;                /* best ones optimised, default 4;
+                                           1..monte_carlo */
+    int traj_max_evals;                 /* NLopt evaluations each, default 3000 */
+    uint64_t traj_seed;                 /* default 1 */
+
+    /* simulation: (loadid) loadid-sim */
+    double sim_servo_bandwidth_hz;      /* joint servo natural frequency, default 15 */
+    double sim_servo_damping;           /* default 0.9 */
+    double sim_backlash;                /* [rad], default 2e-4 */
+    double sim_encoder_counts;          /* per revolution, default 2^20 */
+    double sim_vibration_hz;            /* structural vibration, default 28 */
+    double sim_vibration_linear;        /* amplitude on a - g [m/s^2], default 0.3 */
+    double sim_vibration_angular;       /* amplitude on alpha [rad/s^2], default 3 */
+    double sim_still_s;                 /* rest before the trajectory, default 0.5 */
+    double sim_load_phi[10];            /* default: the paper's o1 */
+    double sim_offset[6];               /* F/T offset [N, N m], default
+                                           [2 -1.5 3 0.08 -0.05 0.03] */
+    uint64_t sim_seed;                  /* default 1 */
+} loadid_config_t;
+
+/* Fills cfg with every default (robot_urdf: the shipped RX60, given the
+ * source tree root at build time). */
+void loadid_config_default(loadid_config_t *cfg);
+
+/* Called for each warning (an unknown key); msg is a full line. */
+typedef void (*loadid_config_warn_fn)(void *ctx, const char *msg);
+
+/* Reads path into cfg (defaults first, then the file). Returns 0, or -1
+ * with a one-line message in err ("FILE:LINE: KEY: what is wrong", or
+ * "FILE: cannot read: reason"; err may be NULL when errlen is 0), cfg then
+ * unchanged. warn may be NULL; it is called only on success. */
+int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t errlen,
+                       loadid_config_warn_fn warn, void *warn_ctx);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* LOADID_CONFIG_H */

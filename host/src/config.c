@@ -1,0 +1,515 @@
+/*
+ * The configuration file (loadid/config.h): defaults, then the YAML file
+ * read through yaml_tree.h, every value checked where it is read so that
+ * the error names its own line and key.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include "loadid/config.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "loadid/estimator.h"
+#include "loadid/joint_filter.h"
+#include "loadid/signals.h"
+#include "loadid/yaml_tree.h"
+
+#ifndef LOADID_DEFAULT_URDF
+#error "the build defines LOADID_DEFAULT_URDF, the path of the shipped rx60.urdf"
+#endif
+
+/* SocketCAN interface names hold at most IFNAMSIZ - 1 = 15 characters. */
+#define CAN_IFNAME_MAX 15
+/* base+4 (the full-scale frame) is the highest identifier of the JR3
+ * group and must stay an 11-bit identifier (DESIGN.md, JR3 over CAN). */
+#define CAN_BASE_ID_MAX (0x7FFu - 4u)
+
+/* The paper's load o1 (section V.A) [kg, kg m, kg m^2], as in
+ * tools/synth's loadid_synth_phi_o1. */
+static const double kPhiO1[10] = {1.00,    -43.5e-3, 28.5e-3, 22.5e-3,  2.21e-3,
+                                  1.22e-3, 0.96e-3,  3.74e-3, -0.63e-3, 4.95e-3};
+
+void loadid_config_default(loadid_config_t *cfg) {
+    if (!cfg) return;
+    memset(cfg, 0, sizeof *cfg);
+    snprintf(cfg->robot_urdf, sizeof cfg->robot_urdf, "%s", LOADID_DEFAULT_URDF);
+    snprintf(cfg->robot_base_link, sizeof cfg->robot_base_link, "base_link");
+    snprintf(cfg->robot_sensor_link, sizeof cfg->robot_sensor_link, "ft_sensor");
+    cfg->robot_gravity[2] = -9.81;
+
+    snprintf(cfg->can_interface, sizeof cfg->can_interface, "vcan0");
+    cfg->can_base_id = 0x1A0;
+    for (int i = 0; i < 3; ++i) {
+        /* the paper's JR3 85M35A3-I40-D 200N12; accelerometer full scales
+         * are configuration values (DESIGN.md) */
+        cfg->jr3_fs_force[i] = 200.0;
+        cfg->jr3_fs_moment[i] = 12.0;
+        cfg->jr3_fs_linear[i] = 98.1;
+        cfg->jr3_fs_angular[i] = 1000.0;
+    }
+    snprintf(cfg->lcm_url, sizeof cfg->lcm_url, "udpm://239.255.76.67:7667?ttl=0");
+
+    cfg->num_methods = 3;
+    cfg->methods[0] = LOADID_METHOD_RTLS;
+    cfg->methods[1] = LOADID_METHOD_RIV;
+    cfg->methods[2] = LOADID_METHOD_RLS;
+    cfg->signals = LOADID_SIGNALS_MIXED;
+    cfg->offset_model_estimate = 0;
+    cfg->duration_s = 1.5;
+    cfg->zeroing_window_s = 0.2;
+
+    cfg->noise_force = 0.1;
+    cfg->noise_torque = 0.005;
+    cfg->noise_linear = 0.5;
+    cfg->noise_angular = 5.0;
+    cfg->noise_omega = 0.02;
+    cfg->omega_typical = 2.0;
+
+    /* The joint side's own defaults, so the two never drift apart. */
+    loadid_jf_config_t jf;
+    loadid_jf_config_default(&jf);
+    loadid_signals_config_t sig;
+    loadid_signals_config_default(&sig);
+    cfg->kalman_jerk_psd = (double)jf.jerk_psd;
+    cfg->kalman_meas_sigma = (double)jf.meas_sigma;
+    cfg->kalman_max_joint_age_s = (double)sig.max_joint_age_us / 1e6;
+
+    cfg->traj_base_frequency = 0.5;
+    cfg->traj_harmonics = 4;
+    cfg->traj_max_frequency = 2.0;
+    cfg->traj_active_s = 1.5;
+    cfg->traj_fade_s = 0.5;
+    for (int i = 0; i < LOADID_MAX_JOINTS; ++i) cfg->traj_acc_limit[i] = 20.0;
+    cfg->traj_vel_scale = 1.0;
+    for (int i = 0; i < 3; ++i) {
+        cfg->traj_workspace_min[i] = -1e9;
+        cfg->traj_workspace_max[i] = 1e9;
+    }
+    cfg->traj_floor_z = -1e9;
+    cfg->traj_floor_clearance = 0.05;
+    cfg->traj_monte_carlo = 2000;
+    cfg->traj_candidates = 4;
+    cfg->traj_max_evals = 3000;
+    cfg->traj_seed = 1;
+
+    cfg->sim_servo_bandwidth_hz = 15.0;
+    cfg->sim_servo_damping = 0.9;
+    cfg->sim_backlash = 2e-4;
+    cfg->sim_encoder_counts = 1048576.0; /* 2^20 */
+    cfg->sim_vibration_hz = 28.0;
+    cfg->sim_vibration_linear = 0.3;
+    cfg->sim_vibration_angular = 3.0;
+    cfg->sim_still_s = 0.5;
+    memcpy(cfg->sim_load_phi, kPhiO1, sizeof kPhiO1);
+    static const double kOffset[6] = {2.0, -1.5, 3.0, 0.08, -0.05, 0.03};
+    memcpy(cfg->sim_offset, kOffset, sizeof kOffset);
+    cfg->sim_seed = 1;
+}
+
+/* --- Checked readers: 1 read, 0 absent, -EINVAL (message in the doc) ------ */
+
+typedef enum { ANY, POSITIVE, NON_NEGATIVE } sign_rule_t;
+
+static int check_sign(const loadid_yaml_node_t *n, double v, sign_rule_t rule) {
+    if (rule == POSITIVE && !(v > 0)) return loadid_yaml_fail(n, "must be > 0, got %g", v);
+    if (rule == NON_NEGATIVE && !(v >= 0)) return loadid_yaml_fail(n, "must be >= 0, got %g", v);
+    return 0;
+}
+
+static int read_number(loadid_yaml_node_t *map, const char *key, double *out, sign_rule_t rule) {
+    loadid_yaml_node_t *n = loadid_yaml_get(map, key);
+    double v;
+    if (!n) return 0;
+    if (loadid_yaml_as_double(n, &v) || check_sign(n, v, rule)) return -EINVAL;
+    *out = v;
+    return 1;
+}
+
+/* A sequence of min..max numbers (*count of them; count may be NULL when
+ * min == max), each checked at its own line. */
+static int read_numbers(loadid_yaml_node_t *map, const char *key, double *out, size_t min,
+                        size_t max, size_t *count, sign_rule_t rule) {
+    loadid_yaml_node_t *n = loadid_yaml_get(map, key);
+    double v[LOADID_MAX_JOINTS > 10 ? LOADID_MAX_JOINTS : 10];
+    size_t k = 0;
+    if (!n) return 0;
+    if (max > sizeof v / sizeof v[0]) return loadid_yaml_fail(n, "internal: too many numbers");
+    if (loadid_yaml_as_doubles(n, v, min, max, &k)) return -EINVAL;
+    for (size_t i = 0; i < k; ++i)
+        if (check_sign(loadid_yaml_item(n, i), v[i], rule)) return -EINVAL;
+    memcpy(out, v, k * sizeof v[0]);
+    if (count) *count = k;
+    return 1;
+}
+
+static int read_int(loadid_yaml_node_t *map, const char *key, int *out, int min) {
+    loadid_yaml_node_t *n = loadid_yaml_get(map, key);
+    int v;
+    if (!n) return 0;
+    if (loadid_yaml_as_int(n, &v)) return -EINVAL;
+    if (v < min) return loadid_yaml_fail(n, "must be >= %d, got %d", min, v);
+    *out = v;
+    return 1;
+}
+
+static int read_uint64(loadid_yaml_node_t *map, const char *key, uint64_t *out) {
+    return loadid_yaml_get_uint64(map, key, out);
+}
+
+static int read_name(loadid_yaml_node_t *map, const char *key, char *buf, size_t size) {
+    loadid_yaml_node_t *n = loadid_yaml_get(map, key);
+    if (!n) return 0;
+    if (loadid_yaml_as_string(n, buf, size)) return -EINVAL;
+    if (buf[0] == '\0') return loadid_yaml_fail(n, "must not be empty");
+    return 1;
+}
+
+static int read_section(loadid_yaml_node_t *map, const char *key, loadid_yaml_node_t **out) {
+    return loadid_yaml_get_mapping(map, key, out);
+}
+
+/* rel against the directory of config_path, made absolute (against the
+ * working directory when config_path is relative), so that it stays valid
+ * when the daemon changes directory. Not normalised, not checked for
+ * existence: the URDF reader reports a missing file with its path. */
+static int resolve_path(const loadid_yaml_node_t *n, const char *config_path, const char *rel,
+                        char *out, size_t size) {
+    char dir[LOADID_PATH_MAX];
+    size_t len;
+    if (rel[0] == '/') {
+        len = (size_t)snprintf(out, size, "%s", rel);
+    } else {
+        const char *slash = strrchr(config_path, '/');
+        size_t dlen = 0;
+        if (config_path[0] != '/') {
+            if (!getcwd(dir, sizeof dir))
+                return loadid_yaml_fail(n, "cannot resolve %s: working directory: %s", rel,
+                                        strerror(errno));
+            dlen = strlen(dir);
+        }
+        if (slash) {
+            const size_t part = (size_t)(slash - config_path);
+            if (dlen + 1 + part + 1 > sizeof dir)
+                return loadid_yaml_fail(n, "resolved path longer than %d characters",
+                                        LOADID_PATH_MAX - 1);
+            if (dlen > 0 && part > 0) dir[dlen++] = '/';
+            memcpy(dir + dlen, config_path, part);
+            dlen += part;
+            if (dlen == 0) dir[dlen++] = '/'; /* config in / */
+        }
+        dir[dlen] = '\0';
+        const int sep = dlen > 0 && dir[dlen - 1] != '/';
+        len = (size_t)snprintf(out, size, "%s%s%s", dir, sep ? "/" : "", rel);
+    }
+    if (len >= size)
+        return loadid_yaml_fail(n, "resolved path longer than %zu characters", size - 1);
+    return 0;
+}
+
+#define TRY(expr)                                                                                \
+    do {                                                                                         \
+        if ((expr) < 0) goto fail;                                                               \
+    } while (0)
+
+static const char *kind_name(const loadid_yaml_node_t *n) {
+    switch (loadid_yaml_kind(n)) {
+        case LOADID_YAML_MAPPING: return "a mapping";
+        case LOADID_YAML_SEQUENCE: return "a sequence";
+        default: return "a scalar";
+    }
+}
+
+/* The first of the nodes given that is present: where a check of several
+ * keys together is reported. */
+static const loadid_yaml_node_t *first_present(const loadid_yaml_node_t *a,
+                                               const loadid_yaml_node_t *b,
+                                               const loadid_yaml_node_t *c) {
+    return a ? a : b ? b : c;
+}
+
+static int read_robot(loadid_yaml_node_t *root, const char *path, loadid_config_t *c) {
+    loadid_yaml_node_t *s = NULL, *n;
+    TRY(read_section(root, "robot", &s));
+    char urdf[LOADID_PATH_MAX];
+    if ((n = loadid_yaml_get(s, "urdf"))) {
+        TRY(loadid_yaml_as_string(n, urdf, sizeof urdf));
+        if (!urdf[0]) return loadid_yaml_fail(n, "must not be empty");
+        TRY(resolve_path(n, path, urdf, c->robot_urdf, sizeof c->robot_urdf));
+    }
+    TRY(read_name(s, "base_link", c->robot_base_link, sizeof c->robot_base_link));
+    TRY(read_name(s, "sensor_link", c->robot_sensor_link, sizeof c->robot_sensor_link));
+    TRY(read_numbers(s, "gravity", c->robot_gravity, 3, 3, NULL, ANY));
+    return 0;
+fail:
+    return -EINVAL;
+}
+
+static int read_can_jr3_lcm(loadid_yaml_node_t *root, loadid_config_t *c) {
+    loadid_yaml_node_t *s = NULL, *fs = NULL, *n;
+    TRY(read_section(root, "can", &s));
+    if ((n = loadid_yaml_get(s, "interface"))) {
+        char name[sizeof c->can_interface];
+        TRY(loadid_yaml_as_string(n, name, sizeof name));
+        if (!name[0] || strlen(name) > CAN_IFNAME_MAX)
+            return loadid_yaml_fail(n, "a network interface name has 1 to %d characters, got '%s'",
+                                    CAN_IFNAME_MAX, name);
+        memcpy(c->can_interface, name, sizeof name);
+    }
+    if ((n = loadid_yaml_get(s, "base_id"))) {
+        uint64_t id;
+        TRY(loadid_yaml_as_uint64(n, &id));
+        if (id > CAN_BASE_ID_MAX)
+            return loadid_yaml_fail(n,
+                                    "must be at most 0x%X (base+4 must be an 11-bit identifier, "
+                                    "<= 0x7FF), got 0x%llX",
+                                    CAN_BASE_ID_MAX, (unsigned long long)id);
+        c->can_base_id = (uint32_t)id;
+    }
+
+    TRY(read_section(root, "jr3", &s));
+    TRY(read_section(s, "full_scale", &fs));
+    TRY(read_numbers(fs, "force", c->jr3_fs_force, 3, 3, NULL, POSITIVE));
+    TRY(read_numbers(fs, "moment", c->jr3_fs_moment, 3, 3, NULL, POSITIVE));
+    TRY(read_numbers(fs, "linear", c->jr3_fs_linear, 3, 3, NULL, POSITIVE));
+    TRY(read_numbers(fs, "angular", c->jr3_fs_angular, 3, 3, NULL, POSITIVE));
+
+    TRY(read_section(root, "lcm", &s));
+    if ((n = loadid_yaml_get(s, "url"))) {
+        char url[sizeof c->lcm_url];
+        TRY(loadid_yaml_as_string(n, url, sizeof url));
+        const char *sep = strstr(url, "://");
+        if (!sep || sep == url)
+            return loadid_yaml_fail(n, "expected an LCM URL such as "
+                                       "udpm://239.255.76.67:7667?ttl=0, got '%s'", url);
+        memcpy(c->lcm_url, url, sizeof url);
+    }
+    return 0;
+fail:
+    return -EINVAL;
+}
+
+static int read_methods(loadid_yaml_node_t *seq, loadid_config_t *c) {
+    const size_t count = loadid_yaml_count(seq);
+    if (count == 0) return loadid_yaml_fail(seq, "expected at least one method, got none");
+    int methods[LOADID_MAX_METHODS];
+    size_t first[LOADID_METHOD_TLS_BATCH + 1] = {0}; /* 1 + index of its first listing */
+    for (size_t i = 0; i < count; ++i) {
+        const loadid_yaml_node_t *item = loadid_yaml_item(seq, i);
+        char name[64];
+        if (loadid_yaml_as_string(item, name, sizeof name)) return -EINVAL;
+        const int m = loadid_method_from_name(name);
+        if (m < LOADID_METHOD_RLS || m > LOADID_METHOD_TLS_BATCH)
+            return loadid_yaml_fail(item,
+                                    "unknown method '%s' (RLS, RIV, RTLS, LS_BATCH or TLS_BATCH)",
+                                    name);
+        if (first[m])
+            return loadid_yaml_fail(item, "method %s listed twice (first as item %zu)", name,
+                                    first[m] - 1);
+        first[m] = i + 1;
+        /* five names and no duplicates: i < LOADID_MAX_METHODS here */
+        methods[i] = m;
+    }
+    memcpy(c->methods, methods, count * sizeof methods[0]);
+    c->num_methods = (int)count;
+    return 0;
+}
+
+static int read_estimation(loadid_yaml_node_t *root, loadid_config_t *c) {
+    loadid_yaml_node_t *s = NULL, *n;
+    char word[64];
+    TRY(read_section(root, "estimation", &s));
+    if (loadid_yaml_get(s, "methods")) {
+        TRY(loadid_yaml_get_sequence(s, "methods", &n));
+        TRY(read_methods(n, c));
+    }
+    if ((n = loadid_yaml_get(s, "signals"))) {
+        TRY(loadid_yaml_as_string(n, word, sizeof word));
+        loadid_signal_source_t src;
+        if (loadid_signal_source_parse(word, &src))
+            return loadid_yaml_fail(n, "unknown signal source '%s' (sensor, kf, setpoint or mixed)",
+                                    word);
+        c->signals = (int)src;
+    }
+    if ((n = loadid_yaml_get(s, "offset_model"))) {
+        TRY(loadid_yaml_as_string(n, word, sizeof word));
+        if (!strcmp(word, "zeroing"))
+            c->offset_model_estimate = 0;
+        else if (!strcmp(word, "estimate"))
+            c->offset_model_estimate = 1;
+        else
+            return loadid_yaml_fail(n, "unknown offset model '%s' (zeroing or estimate)", word);
+    }
+    TRY(read_number(s, "duration_s", &c->duration_s, POSITIVE));
+
+    TRY(read_section(root, "zeroing", &s));
+    TRY(read_number(s, "window_s", &c->zeroing_window_s, POSITIVE));
+
+    TRY(read_section(root, "distal", &s));
+    TRY(read_numbers(s, "phi", c->distal_phi, 10, 10, NULL, ANY));
+
+    TRY(read_section(root, "noise", &s));
+    TRY(read_number(s, "force", &c->noise_force, POSITIVE));
+    TRY(read_number(s, "torque", &c->noise_torque, POSITIVE));
+    TRY(read_number(s, "linear", &c->noise_linear, POSITIVE));
+    TRY(read_number(s, "angular", &c->noise_angular, POSITIVE));
+    TRY(read_number(s, "omega", &c->noise_omega, POSITIVE));
+    TRY(read_number(s, "omega_typical", &c->omega_typical, POSITIVE));
+
+    TRY(read_section(root, "kalman", &s));
+    TRY(read_number(s, "jerk_psd", &c->kalman_jerk_psd, POSITIVE));
+    TRY(read_number(s, "meas_sigma", &c->kalman_meas_sigma, POSITIVE));
+    TRY(read_number(s, "max_joint_age_s", &c->kalman_max_joint_age_s, POSITIVE));
+    return 0;
+fail:
+    return -EINVAL;
+}
+
+static int read_trajectory(loadid_yaml_node_t *root, loadid_config_t *c) {
+    loadid_yaml_node_t *s = NULL, *ws = NULL, *n;
+    TRY(read_section(root, "trajectory", &s));
+    TRY(read_number(s, "base_frequency", &c->traj_base_frequency, POSITIVE));
+    TRY(read_int(s, "harmonics", &c->traj_harmonics, 1));
+    TRY(read_number(s, "max_frequency", &c->traj_max_frequency, POSITIVE));
+    /* The highest harmonic N f of eq. (10) within the allowed band; the
+     * relative slack keeps 3 * 0.1 <= 0.3 true in binary. */
+    if (c->traj_harmonics * c->traj_base_frequency > c->traj_max_frequency * (1 + 1e-9)) {
+        return loadid_yaml_fail(
+            first_present(loadid_yaml_get(s, "harmonics"), loadid_yaml_get(s, "base_frequency"),
+                          loadid_yaml_get(s, "max_frequency")),
+            "%d harmonics of %g Hz reach %g Hz, above trajectory.max_frequency %g Hz",
+            c->traj_harmonics, c->traj_base_frequency,
+            c->traj_harmonics * c->traj_base_frequency, c->traj_max_frequency);
+    }
+    TRY(read_number(s, "active_s", &c->traj_active_s, POSITIVE));
+    TRY(read_number(s, "fade_s", &c->traj_fade_s, NON_NEGATIVE));
+
+    size_t k = 0;
+    int rc;
+    TRY(rc = read_numbers(s, "home", c->traj_home, 1, LOADID_MAX_JOINTS, &k, ANY));
+    if (rc == 1) {
+        c->traj_has_home = 1;
+        c->traj_num_home = (int)k;
+    }
+    if ((n = loadid_yaml_get(s, "acc_limit")) && loadid_yaml_kind(n) == LOADID_YAML_SCALAR) {
+        double a = 0;
+        TRY(read_number(s, "acc_limit", &a, POSITIVE)); /* one limit for every joint */
+        for (int i = 0; i < LOADID_MAX_JOINTS; ++i) c->traj_acc_limit[i] = a;
+        c->traj_num_acc_limits = 0;
+    } else {
+        TRY(rc = read_numbers(s, "acc_limit", c->traj_acc_limit, 1, LOADID_MAX_JOINTS, &k,
+                              POSITIVE));
+        if (rc == 1) c->traj_num_acc_limits = (int)k;
+    }
+    if ((n = loadid_yaml_get(s, "vel_scale"))) {
+        TRY(read_number(s, "vel_scale", &c->traj_vel_scale, POSITIVE));
+        if (c->traj_vel_scale > 1)
+            return loadid_yaml_fail(n, "a fraction of the URDF velocity limits: must be <= 1, "
+                                       "got %g", c->traj_vel_scale);
+    }
+    TRY(read_section(s, "workspace", &ws));
+    TRY(read_numbers(ws, "min", c->traj_workspace_min, 3, 3, NULL, ANY));
+    TRY(read_numbers(ws, "max", c->traj_workspace_max, 3, 3, NULL, ANY));
+    for (int i = 0; i < 3; ++i) {
+        if (c->traj_workspace_min[i] < c->traj_workspace_max[i]) continue;
+        return loadid_yaml_fail(
+            first_present(loadid_yaml_get(ws, "min"), loadid_yaml_get(ws, "max"), NULL),
+            "workspace min must be below max on every axis: %c: min %g >= max %g", "xyz"[i],
+            c->traj_workspace_min[i], c->traj_workspace_max[i]);
+    }
+    TRY(read_number(s, "floor_z", &c->traj_floor_z, ANY));
+    TRY(read_number(s, "floor_clearance", &c->traj_floor_clearance, NON_NEGATIVE));
+    TRY(read_int(s, "monte_carlo", &c->traj_monte_carlo, 1));
+    TRY(read_int(s, "candidates", &c->traj_candidates, 1));
+    if (c->traj_candidates > c->traj_monte_carlo) {
+        return loadid_yaml_fail(
+            first_present(loadid_yaml_get(s, "candidates"), loadid_yaml_get(s, "monte_carlo"), NULL),
+            "%d candidates to optimise out of %d random ones: candidates must be <= monte_carlo",
+            c->traj_candidates, c->traj_monte_carlo);
+    }
+    TRY(read_int(s, "max_evals", &c->traj_max_evals, 1));
+    TRY(read_uint64(s, "seed", &c->traj_seed));
+    return 0;
+fail:
+    return -EINVAL;
+}
+
+static int read_simulation(loadid_yaml_node_t *root, loadid_config_t *c) {
+    loadid_yaml_node_t *s = NULL;
+    TRY(read_section(root, "simulation", &s));
+    TRY(read_number(s, "servo_bandwidth_hz", &c->sim_servo_bandwidth_hz, POSITIVE));
+    TRY(read_number(s, "servo_damping", &c->sim_servo_damping, POSITIVE));
+    TRY(read_number(s, "backlash", &c->sim_backlash, NON_NEGATIVE));
+    TRY(read_number(s, "encoder_counts", &c->sim_encoder_counts, POSITIVE));
+    TRY(read_number(s, "vibration_hz", &c->sim_vibration_hz, POSITIVE));
+    TRY(read_number(s, "vibration_linear", &c->sim_vibration_linear, NON_NEGATIVE));
+    TRY(read_number(s, "vibration_angular", &c->sim_vibration_angular, NON_NEGATIVE));
+    TRY(read_number(s, "still_s", &c->sim_still_s, NON_NEGATIVE));
+    TRY(read_numbers(s, "load_phi", c->sim_load_phi, 10, 10, NULL, ANY));
+    TRY(read_numbers(s, "offset", c->sim_offset, 6, 6, NULL, ANY));
+    TRY(read_uint64(s, "seed", &c->sim_seed));
+    return 0;
+fail:
+    return -EINVAL;
+}
+
+typedef struct {
+    loadid_config_warn_fn fn;
+    void *ctx;
+} warn_sink_t;
+
+static void forward_warning(void *ctx, const char *msg) {
+    const warn_sink_t *w = ctx;
+    if (w->fn) w->fn(w->ctx, msg);
+}
+
+int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t errlen,
+                       loadid_config_warn_fn warn, void *warn_ctx) {
+    if (err && errlen) err[0] = '\0';
+    if (!path || !cfg) {
+        if (err && errlen) snprintf(err, errlen, "loadid_config_load: invalid argument");
+        return -1;
+    }
+    loadid_yaml_doc_t *doc = NULL;
+    if (loadid_yaml_load_file(path, &doc, err, errlen) < 0) return -1;
+
+    loadid_config_t *c = malloc(sizeof *c); /* cfg stays untouched on failure */
+    if (!c) {
+        if (err && errlen) snprintf(err, errlen, "%s: out of memory", path);
+        loadid_yaml_free(doc);
+        return -1;
+    }
+    loadid_config_default(c);
+    loadid_yaml_node_t *root = loadid_yaml_root(doc);
+    warn_sink_t sink = {warn, warn_ctx};
+    if (!root) {
+        char msg[LOADID_PATH_MAX + 96];
+        snprintf(msg, sizeof msg, "%s:1: (top level): empty configuration, every key takes its "
+                                  "default", path);
+        forward_warning(&sink, msg);
+    } else if (loadid_yaml_kind(root) != LOADID_YAML_MAPPING) {
+        loadid_yaml_fail(root, "expected a mapping of sections (robot:, can:, ...), got %s",
+                         kind_name(root));
+        goto fail;
+    }
+    TRY(read_robot(root, path, c));
+    TRY(read_can_jr3_lcm(root, c));
+    TRY(read_estimation(root, c));
+    TRY(read_trajectory(root, c));
+    TRY(read_simulation(root, c));
+    loadid_yaml_report_unused(doc, forward_warning, &sink);
+
+    *cfg = *c;
+    free(c);
+    loadid_yaml_free(doc);
+    return 0;
+fail:
+    if (err && errlen) snprintf(err, errlen, "%s", loadid_yaml_error(doc));
+    free(c);
+    loadid_yaml_free(doc);
+    return -1;
+}

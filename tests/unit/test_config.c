@@ -1,0 +1,954 @@
+/*
+ * Unit tests of the configuration loader (loadid/config.h) and of the YAML
+ * tree under it (host/src/yaml_tree.h).
+ *
+ * The expected defaults are written here literally, from DESIGN.md and
+ * config.h, not taken from loadid_config_default: the shipped example
+ * host/config/loadid.yaml, the function and this list must agree. Every
+ * error is checked with its full "FILE:LINE: KEY: what" prefix, line
+ * numbers included. Files are written into a fresh temporary directory.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "loadid/config.h"
+#include "loadid/estimator.h"
+#include "loadid/signals.h"
+#include "loadid/yaml_tree.h"
+
+#ifndef LOADID_SOURCE_DIR
+#error "the build defines LOADID_SOURCE_DIR"
+#endif
+
+#define EXAMPLE LOADID_SOURCE_DIR "/host/config/loadid.yaml"
+#define SHIPPED_URDF LOADID_SOURCE_DIR "/host/config/robots/rx60.urdf"
+
+/* --- Temporary files ------------------------------------------------------ */
+
+static char g_dir[256];
+static char g_created[64][512]; /* removed in reverse order at the end */
+static int g_num_created;
+
+static const char *tmp_path(const char *name) {
+    static char buf[8][512];
+    static int k;
+    char *p = buf[k++ % 8];
+    snprintf(p, 512, "%s/%s", g_dir, name);
+    return p;
+}
+
+static void remember(const char *path) {
+    for (int i = 0; i < g_num_created; ++i)
+        if (!strcmp(g_created[i], path)) return;
+    assert_true(g_num_created < 64);
+    snprintf(g_created[g_num_created++], sizeof g_created[0], "%s", path);
+}
+
+/* Writes text to name in the temporary directory; returns the full path. */
+static const char *write_file(const char *name, const char *text) {
+    const char *path = tmp_path(name);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(text, 1, strlen(text), f), strlen(text));
+    assert_int_equal(fclose(f), 0);
+    remember(path);
+    return path;
+}
+
+static const char *make_dir(const char *name) {
+    const char *path = tmp_path(name);
+    assert_true(mkdir(path, 0700) == 0 || errno == EEXIST);
+    remember(path);
+    return path;
+}
+
+static int setup_dir(void **state) {
+    (void)state;
+    snprintf(g_dir, sizeof g_dir, "/tmp/loadid_test_config_XXXXXX");
+    return mkdtemp(g_dir) ? 0 : -1;
+}
+
+static int remove_dir(void **state) {
+    (void)state;
+    for (int i = g_num_created - 1; i >= 0; --i) remove(g_created[i]);
+    return rmdir(g_dir);
+}
+
+/* --- Loading with captured warnings --------------------------------------- */
+
+typedef struct {
+    int count;
+    char msg[8][512];
+} warnings_t;
+
+static void collect(void *ctx, const char *msg) {
+    warnings_t *w = ctx;
+    if (w->count < 8) snprintf(w->msg[w->count], sizeof w->msg[0], "%s", msg);
+    ++w->count;
+}
+
+static void load_ok(const char *path, loadid_config_t *cfg, warnings_t *w) {
+    char err[1024] = "";
+    memset(w, 0, sizeof *w);
+    const int rc = loadid_config_load(path, cfg, err, sizeof err, collect, w);
+    if (rc != 0) print_error("unexpected error: %s\n", err);
+    assert_int_equal(rc, 0);
+    assert_string_equal(err, "");
+}
+
+static void assert_prefix(const char *actual, const char *expected) {
+    if (strncmp(actual, expected, strlen(expected)) != 0) {
+        print_error("expected a message starting with\n  %s\ngot\n  %s\n", expected, actual);
+        fail();
+    }
+}
+
+/* Writes text to e.yaml, loads it, expects failure with the message
+ * "<dir>/e.yaml:" rest... and no warning. */
+static void expect_error(const char *text, const char *rest) {
+    const char *path = write_file("e.yaml", text);
+    char expected[1024], err[1024] = "";
+    snprintf(expected, sizeof expected, "%s:%s", path, rest);
+    loadid_config_t cfg;
+    warnings_t w = {0};
+    assert_int_equal(loadid_config_load(path, &cfg, err, sizeof err, collect, &w), -1);
+    assert_prefix(err, expected);
+    assert_null(strchr(err, '\n'));
+    assert_int_equal(w.count, 0);
+}
+
+static void assert_doubles(const double *a, const double *expected, int n, const char *what) {
+    for (int i = 0; i < n; ++i) {
+        if (!(a[i] == expected[i])) {
+            print_error("%s[%d]: %.17g, expected %.17g\n", what, i, a[i], expected[i]);
+            fail();
+        }
+    }
+}
+
+#define ASSERT_EQ_D(a, e)                                                                        \
+    do {                                                                                         \
+        const double a_ = (a), e_ = (e);                                                         \
+        if (!(a_ == e_)) {                                                                       \
+            print_error("%s: %.17g, expected %.17g\n", #a, a_, e_);                              \
+            fail();                                                                              \
+        }                                                                                        \
+    } while (0)
+
+/* DESIGN.md's and config.h's defaults, written out. */
+static void assert_defaults(const loadid_config_t *c) {
+    assert_string_equal(c->robot_urdf, SHIPPED_URDF);
+    assert_string_equal(c->robot_base_link, "base_link");
+    assert_string_equal(c->robot_sensor_link, "ft_sensor");
+    assert_doubles(c->robot_gravity, (const double[]){0.0, 0.0, -9.81}, 3, "robot_gravity");
+
+    assert_string_equal(c->can_interface, "vcan0");
+    assert_int_equal(c->can_base_id, 0x1A0);
+    assert_doubles(c->jr3_fs_force, (const double[]){200, 200, 200}, 3, "jr3_fs_force");
+    assert_doubles(c->jr3_fs_moment, (const double[]){12, 12, 12}, 3, "jr3_fs_moment");
+    assert_doubles(c->jr3_fs_linear, (const double[]){98.1, 98.1, 98.1}, 3, "jr3_fs_linear");
+    assert_doubles(c->jr3_fs_angular, (const double[]){1000, 1000, 1000}, 3, "jr3_fs_angular");
+    assert_string_equal(c->lcm_url, "udpm://239.255.76.67:7667?ttl=0");
+
+    assert_int_equal(c->num_methods, 3);
+    assert_int_equal(c->methods[0], LOADID_METHOD_RTLS);
+    assert_int_equal(c->methods[1], LOADID_METHOD_RIV);
+    assert_int_equal(c->methods[2], LOADID_METHOD_RLS);
+    assert_int_equal(c->signals, LOADID_SIGNALS_MIXED);
+    assert_int_equal(c->offset_model_estimate, 0);
+    ASSERT_EQ_D(c->duration_s, 1.5);
+    ASSERT_EQ_D(c->zeroing_window_s, 0.2);
+    assert_doubles(c->distal_phi, (const double[10]){0}, 10, "distal_phi");
+
+    ASSERT_EQ_D(c->noise_force, 0.1);
+    ASSERT_EQ_D(c->noise_torque, 0.005);
+    ASSERT_EQ_D(c->noise_linear, 0.5);
+    ASSERT_EQ_D(c->noise_angular, 5.0);
+    ASSERT_EQ_D(c->noise_omega, 0.02);
+    ASSERT_EQ_D(c->omega_typical, 2.0);
+
+    /* joint_filter.h's documented defaults; relative tolerance for the
+     * float core (LOADID_SCALAR=float) */
+    assert_true(fabs(c->kalman_jerk_psd - 1e3) <= 1e-6 * 1e3);
+    const double sigma = 2 * 3.14159265358979323846 / 1048576.0 / sqrt(12.0);
+    assert_true(fabs(c->kalman_meas_sigma - sigma) <= 1e-6 * sigma);
+    ASSERT_EQ_D(c->kalman_max_joint_age_s, 0.005);
+
+    ASSERT_EQ_D(c->traj_base_frequency, 0.5);
+    assert_int_equal(c->traj_harmonics, 4);
+    ASSERT_EQ_D(c->traj_max_frequency, 2.0);
+    ASSERT_EQ_D(c->traj_active_s, 1.5);
+    ASSERT_EQ_D(c->traj_fade_s, 0.5);
+    assert_int_equal(c->traj_has_home, 0);
+    assert_int_equal(c->traj_num_home, 0);
+    assert_int_equal(c->traj_num_acc_limits, 0);
+    for (int i = 0; i < LOADID_MAX_JOINTS; ++i) ASSERT_EQ_D(c->traj_acc_limit[i], 20.0);
+    ASSERT_EQ_D(c->traj_vel_scale, 1.0);
+    assert_doubles(c->traj_workspace_min, (const double[]){-1e9, -1e9, -1e9}, 3, "workspace_min");
+    assert_doubles(c->traj_workspace_max, (const double[]){1e9, 1e9, 1e9}, 3, "workspace_max");
+    ASSERT_EQ_D(c->traj_floor_z, -1e9);
+    ASSERT_EQ_D(c->traj_floor_clearance, 0.05);
+    assert_int_equal(c->traj_monte_carlo, 2000);
+    assert_int_equal(c->traj_candidates, 4);
+    assert_int_equal(c->traj_max_evals, 3000);
+    assert_true(c->traj_seed == 1);
+
+    ASSERT_EQ_D(c->sim_servo_bandwidth_hz, 15.0);
+    ASSERT_EQ_D(c->sim_servo_damping, 0.9);
+    ASSERT_EQ_D(c->sim_backlash, 2e-4);
+    ASSERT_EQ_D(c->sim_encoder_counts, 1048576.0);
+    ASSERT_EQ_D(c->sim_vibration_hz, 28.0);
+    ASSERT_EQ_D(c->sim_vibration_linear, 0.3);
+    ASSERT_EQ_D(c->sim_vibration_angular, 3.0);
+    ASSERT_EQ_D(c->sim_still_s, 0.5);
+    /* the paper's o1, section V.A */
+    assert_doubles(c->sim_load_phi,
+                   (const double[]){1.00, -43.5e-3, 28.5e-3, 22.5e-3, 2.21e-3, 1.22e-3, 0.96e-3,
+                                    3.74e-3, -0.63e-3, 4.95e-3},
+                   10, "sim_load_phi");
+    assert_doubles(c->sim_offset, (const double[]){2, -1.5, 3, 0.08, -0.05, 0.03}, 6, "sim_offset");
+    assert_true(c->sim_seed == 1);
+}
+
+/* --- Defaults and the shipped example ------------------------------------- */
+
+static void shipped_example_is_the_defaults(void **state) {
+    (void)state;
+    loadid_config_t cfg;
+    memset(&cfg, 0x5a, sizeof cfg);
+    warnings_t w;
+    load_ok(EXAMPLE, &cfg, &w);
+    for (int i = 0; i < w.count && i < 8; ++i) print_error("warning: %s\n", w.msg[i]);
+    assert_int_equal(w.count, 0);
+    assert_defaults(&cfg);
+}
+
+static void default_function_gives_the_defaults(void **state) {
+    (void)state;
+    loadid_config_t cfg;
+    memset(&cfg, 0x5a, sizeof cfg);
+    loadid_config_default(&cfg);
+    assert_defaults(&cfg);
+    loadid_config_default(NULL); /* no crash */
+}
+
+static void empty_files_give_the_defaults_with_a_warning(void **state) {
+    (void)state;
+    static const char *const kEmpty[] = {"", "# only a comment\n\n", "---\n", "~\n"};
+    for (size_t i = 0; i < sizeof kEmpty / sizeof kEmpty[0]; ++i) {
+        const char *path = write_file("empty.yaml", kEmpty[i]);
+        loadid_config_t cfg;
+        warnings_t w;
+        load_ok(path, &cfg, &w);
+        assert_defaults(&cfg);
+        assert_int_equal(w.count, 1);
+        char expected[600];
+        snprintf(expected, sizeof expected, "%s:1: (top level): empty configuration", path);
+        assert_prefix(w.msg[0], expected);
+    }
+    /* Empty sections are sections left out; no warning. */
+    const char *path = write_file("sections.yaml", "robot:\ncan:\n  # interface: can0\njr3:\n"
+                                                   "  full_scale: ~\ntrajectory:\n  workspace:\n");
+    loadid_config_t cfg;
+    warnings_t w;
+    load_ok(path, &cfg, &w);
+    assert_int_equal(w.count, 0);
+    assert_defaults(&cfg);
+}
+
+/* --- Every key ------------------------------------------------------------ */
+
+static const char kEveryKey[] =
+    "robot:\n"
+    "  urdf: /opt/robots/arm.urdf\n"
+    "  base_link: world\n"
+    "  sensor_link: jr3_link\n"
+    "  gravity: [0.1, -0.2, -9.80665]\n"
+    "can:\n"
+    "  interface: can1\n"
+    "  base_id: 0x2B0\n"
+    "jr3:\n"
+    "  full_scale:\n"
+    "    force: [100, 110, 120.5]\n"
+    "    moment: [5, 6, 7]\n"
+    "    linear: [49.05, 50, 51]\n"
+    "    angular: [500, 600, 700]\n"
+    "lcm:\n"
+    "  url: udpm://239.255.76.67:7668?ttl=1\n"
+    "estimation:\n"
+    "  methods: [TLS_BATCH, LS_BATCH, RLS, RIV, RTLS]\n"
+    "  signals: kf\n"
+    "  offset_model: estimate\n"
+    "  duration_s: 3\n"
+    "zeroing:\n"
+    "  window_s: 0.5\n"
+    "distal:\n"
+    "  phi: [0.2, 0.001, -0.002, 0.0008, 1e-4, 0, 0, 1.5e-4, 0, 1.6e-4]\n"
+    "noise:\n"
+    "  force: 0.2\n"
+    "  torque: 0.01\n"
+    "  linear: 0.25\n"
+    "  angular: 2.5\n"
+    "  omega: 0.01\n"
+    "  omega_typical: 3\n"
+    "kalman:\n"
+    "  jerk_psd: 5000\n"
+    "  meas_sigma: 1e-5\n"
+    "  max_joint_age_s: 0.002\n"
+    "trajectory:\n"
+    "  base_frequency: 0.25\n"
+    "  harmonics: 6\n"
+    "  max_frequency: 1.5\n"
+    "  active_s: 4\n"
+    "  fade_s: 0\n"
+    "  home: [0.1, -0.2, 0.3, -0.4, 0.5, -0.6, 0.7]\n"
+    "  acc_limit:\n"
+    "    - 10\n"
+    "    - 11\n"
+    "    - 12.5\n"
+    "  vel_scale: 0.5\n"
+    "  workspace:\n"
+    "    min: [-0.8, -0.9, 0.1]\n"
+    "    max: [0.8, 0.9, 1.2]\n"
+    "  floor_z: 0.05\n"
+    "  floor_clearance: 0.1\n"
+    "  monte_carlo: 500\n"
+    "  candidates: 8\n"
+    "  max_evals: 1000\n"
+    "  seed: 0xDEADBEEF12345678\n"
+    "simulation:\n"
+    "  servo_bandwidth_hz: 20\n"
+    "  servo_damping: 0.7\n"
+    "  backlash: 0\n"
+    "  encoder_counts: 4096\n"
+    "  vibration_hz: 35\n"
+    "  vibration_linear: 0\n"
+    "  vibration_angular: 1.5\n"
+    "  still_s: 1\n"
+    "  load_phi: [2, 0.01, 0.02, 0.03, 0.004, 0.0001, 0.0002, 0.005, 0.0003, 0.006]\n"
+    "  offset: [-1, 1, -2, 0.01, 0.02, -0.03]\n"
+    "  seed: 18446744073709551615\n";
+
+static void every_key_is_read(void **state) {
+    (void)state;
+    const char *path = write_file("every.yaml", kEveryKey);
+    loadid_config_t c;
+    warnings_t w;
+    load_ok(path, &c, &w);
+    assert_int_equal(w.count, 0);
+
+    assert_string_equal(c.robot_urdf, "/opt/robots/arm.urdf");
+    assert_string_equal(c.robot_base_link, "world");
+    assert_string_equal(c.robot_sensor_link, "jr3_link");
+    assert_doubles(c.robot_gravity, (const double[]){0.1, -0.2, -9.80665}, 3, "gravity");
+    assert_string_equal(c.can_interface, "can1");
+    assert_int_equal(c.can_base_id, 0x2B0);
+    assert_doubles(c.jr3_fs_force, (const double[]){100, 110, 120.5}, 3, "force");
+    assert_doubles(c.jr3_fs_moment, (const double[]){5, 6, 7}, 3, "moment");
+    assert_doubles(c.jr3_fs_linear, (const double[]){49.05, 50, 51}, 3, "linear");
+    assert_doubles(c.jr3_fs_angular, (const double[]){500, 600, 700}, 3, "angular");
+    assert_string_equal(c.lcm_url, "udpm://239.255.76.67:7668?ttl=1");
+
+    assert_int_equal(c.num_methods, 5);
+    static const int kMethods[5] = {LOADID_METHOD_TLS_BATCH, LOADID_METHOD_LS_BATCH,
+                                    LOADID_METHOD_RLS, LOADID_METHOD_RIV, LOADID_METHOD_RTLS};
+    for (int i = 0; i < 5; ++i) assert_int_equal(c.methods[i], kMethods[i]);
+    assert_int_equal(c.signals, LOADID_SIGNALS_KF);
+    assert_int_equal(c.offset_model_estimate, 1);
+    ASSERT_EQ_D(c.duration_s, 3);
+    ASSERT_EQ_D(c.zeroing_window_s, 0.5);
+    assert_doubles(c.distal_phi,
+                   (const double[]){0.2, 0.001, -0.002, 0.0008, 1e-4, 0, 0, 1.5e-4, 0, 1.6e-4}, 10,
+                   "distal_phi");
+
+    ASSERT_EQ_D(c.noise_force, 0.2);
+    ASSERT_EQ_D(c.noise_torque, 0.01);
+    ASSERT_EQ_D(c.noise_linear, 0.25);
+    ASSERT_EQ_D(c.noise_angular, 2.5);
+    ASSERT_EQ_D(c.noise_omega, 0.01);
+    ASSERT_EQ_D(c.omega_typical, 3);
+    ASSERT_EQ_D(c.kalman_jerk_psd, 5000);
+    ASSERT_EQ_D(c.kalman_meas_sigma, 1e-5);
+    ASSERT_EQ_D(c.kalman_max_joint_age_s, 0.002);
+
+    ASSERT_EQ_D(c.traj_base_frequency, 0.25);
+    assert_int_equal(c.traj_harmonics, 6);
+    ASSERT_EQ_D(c.traj_max_frequency, 1.5);
+    ASSERT_EQ_D(c.traj_active_s, 4);
+    ASSERT_EQ_D(c.traj_fade_s, 0);
+    assert_int_equal(c.traj_has_home, 1);
+    assert_int_equal(c.traj_num_home, 7);
+    assert_doubles(c.traj_home, (const double[]){0.1, -0.2, 0.3, -0.4, 0.5, -0.6, 0.7}, 7, "home");
+    assert_int_equal(c.traj_num_acc_limits, 3);
+    assert_doubles(c.traj_acc_limit, (const double[]){10, 11, 12.5}, 3, "acc_limit");
+    ASSERT_EQ_D(c.traj_vel_scale, 0.5);
+    assert_doubles(c.traj_workspace_min, (const double[]){-0.8, -0.9, 0.1}, 3, "workspace.min");
+    assert_doubles(c.traj_workspace_max, (const double[]){0.8, 0.9, 1.2}, 3, "workspace.max");
+    ASSERT_EQ_D(c.traj_floor_z, 0.05);
+    ASSERT_EQ_D(c.traj_floor_clearance, 0.1);
+    assert_int_equal(c.traj_monte_carlo, 500);
+    assert_int_equal(c.traj_candidates, 8);
+    assert_int_equal(c.traj_max_evals, 1000);
+    assert_true(c.traj_seed == 0xDEADBEEF12345678ull);
+
+    ASSERT_EQ_D(c.sim_servo_bandwidth_hz, 20);
+    ASSERT_EQ_D(c.sim_servo_damping, 0.7);
+    ASSERT_EQ_D(c.sim_backlash, 0);
+    ASSERT_EQ_D(c.sim_encoder_counts, 4096);
+    ASSERT_EQ_D(c.sim_vibration_hz, 35);
+    ASSERT_EQ_D(c.sim_vibration_linear, 0);
+    ASSERT_EQ_D(c.sim_vibration_angular, 1.5);
+    ASSERT_EQ_D(c.sim_still_s, 1);
+    assert_doubles(c.sim_load_phi,
+                   (const double[]){2, 0.01, 0.02, 0.03, 0.004, 0.0001, 0.0002, 0.005, 0.0003, 0.006},
+                   10, "load_phi");
+    assert_doubles(c.sim_offset, (const double[]){-1, 1, -2, 0.01, 0.02, -0.03}, 6, "offset");
+    assert_true(c.sim_seed == UINT64_MAX);
+}
+
+static void names_and_single_values(void **state) {
+    (void)state;
+    static const struct {
+        const char *name;
+        int value;
+    } kSources[] = {{"sensor", LOADID_SIGNALS_SENSOR},
+                    {"kf", LOADID_SIGNALS_KF},
+                    {"setpoint", LOADID_SIGNALS_SETPOINT},
+                    {"mixed", LOADID_SIGNALS_MIXED}};
+    char text[256];
+    for (size_t i = 0; i < 4; ++i) {
+        snprintf(text, sizeof text, "estimation:\n  signals: %s\n  offset_model: zeroing\n",
+                 kSources[i].name);
+        loadid_config_t c;
+        warnings_t w;
+        load_ok(write_file("s.yaml", text), &c, &w);
+        assert_int_equal(c.signals, kSources[i].value);
+        assert_int_equal(c.offset_model_estimate, 0);
+    }
+    /* One method; one acceleration limit for every joint; decimal base_id;
+     * a quoted string where a string is expected; integers for reals. */
+    loadid_config_t c;
+    warnings_t w;
+    load_ok(write_file("s.yaml", "estimation:\n  methods: [RIV]\n"
+                                 "trajectory:\n  acc_limit: 15\n"
+                                 "can:\n  base_id: 416\n  interface: \"can0\"\n"
+                                 "robot:\n  gravity: [0, 0, -10]\n"),
+            &c, &w);
+    assert_int_equal(w.count, 0);
+    assert_int_equal(c.num_methods, 1);
+    assert_int_equal(c.methods[0], LOADID_METHOD_RIV);
+    assert_int_equal(c.traj_num_acc_limits, 0);
+    for (int i = 0; i < LOADID_MAX_JOINTS; ++i) ASSERT_EQ_D(c.traj_acc_limit[i], 15);
+    assert_int_equal(c.can_base_id, 0x1A0);
+    assert_string_equal(c.can_interface, "can0");
+    assert_doubles(c.robot_gravity, (const double[]){0, 0, -10}, 3, "gravity");
+}
+
+static void hex_base_id(void **state) {
+    (void)state;
+    static const struct {
+        const char *text;
+        uint32_t id;
+    } kIds[] = {{"0x1A0", 0x1A0}, {"0x1a0", 0x1A0}, {"0x000", 0}, {"0x7FB", 0x7FB}, {"2043", 2043}};
+    for (size_t i = 0; i < sizeof kIds / sizeof kIds[0]; ++i) {
+        char text[64];
+        snprintf(text, sizeof text, "can:\n  base_id: %s\n", kIds[i].text);
+        loadid_config_t c;
+        warnings_t w;
+        load_ok(write_file("id.yaml", text), &c, &w);
+        assert_int_equal(c.can_base_id, kIds[i].id);
+    }
+    expect_error("can:\n  base_id: 0x7FC\n",
+                 "2: can.base_id: must be at most 0x7FB (base+4 must be an 11-bit identifier, "
+                 "<= 0x7FF), got 0x7FC");
+    expect_error("can:\n  base_id: 0x800\n", "2: can.base_id: must be at most 0x7FB");
+    expect_error("can:\n  base_id: -1\n", "2: can.base_id: expected a non-negative integer, got '-1'");
+    expect_error("can:\n  base_id: 0x1G0\n", "2: can.base_id: expected an integer, got '0x1G0'");
+    expect_error("can:\n  base_id: 416.0\n", "2: can.base_id: expected an integer, got '416.0'");
+    expect_error("can:\n  base_id: 0x1FFFFFFFFFFFFFFFF\n", "2: can.base_id: integer out of range");
+}
+
+/* --- Paths ------------------------------------------------------------------ */
+
+static void relative_urdf_paths_follow_the_config_file(void **state) {
+    (void)state;
+    make_dir("sub");
+    loadid_config_t c;
+    warnings_t w;
+    char expected[1024];
+
+    load_ok(write_file("sub/a.yaml", "robot:\n  urdf: robots/arm.urdf\n"), &c, &w);
+    snprintf(expected, sizeof expected, "%s/sub/robots/arm.urdf", g_dir);
+    assert_string_equal(c.robot_urdf, expected);
+
+    load_ok(write_file("sub/b.yaml", "robot:\n  urdf: ../arm.urdf\n"), &c, &w);
+    snprintf(expected, sizeof expected, "%s/sub/../arm.urdf", g_dir);
+    assert_string_equal(c.robot_urdf, expected);
+
+    load_ok(write_file("sub/c.yaml", "robot:\n  urdf: /abs/arm.urdf\n"), &c, &w);
+    assert_string_equal(c.robot_urdf, "/abs/arm.urdf");
+
+    /* A relative config path: made absolute against the working directory. */
+    char cwd[512], here[512];
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    assert_int_equal(chdir(g_dir), 0);
+    assert_non_null(getcwd(here, sizeof here));
+    char err[1024] = "";
+    int rc = loadid_config_load("sub/a.yaml", &c, err, sizeof err, NULL, NULL);
+    int rc2 = -2;
+    char urdf2[LOADID_PATH_MAX] = "";
+    if (rc == 0) {
+        loadid_config_t c2;
+        assert_int_equal(chdir("sub"), 0);
+        rc2 = loadid_config_load("a.yaml", &c2, err, sizeof err, NULL, NULL);
+        snprintf(urdf2, sizeof urdf2, "%s", c2.robot_urdf);
+    }
+    assert_int_equal(chdir(cwd), 0);
+    assert_int_equal(rc, 0);
+    snprintf(expected, sizeof expected, "%s/sub/robots/arm.urdf", here);
+    assert_string_equal(c.robot_urdf, expected);
+    assert_int_equal(rc2, 0);
+    assert_string_equal(urdf2, expected);
+
+    /* The shipped example's urdf is the shipped robot, next to it. */
+    load_ok(EXAMPLE, &c, &w);
+    assert_string_equal(c.robot_urdf, SHIPPED_URDF);
+    assert_int_equal(access(c.robot_urdf, R_OK), 0);
+
+    expect_error("robot:\n  urdf: \"\"\n", "2: robot.urdf: must not be empty");
+}
+
+/* --- Errors ------------------------------------------------------------------ */
+
+static void syntax_errors_name_their_line(void **state) {
+    (void)state;
+    expect_error("robot:\n  base_link: a\n  sensor_link: b: c\n",
+                 "3: robot: syntax error: mapping values are not allowed in this context");
+    expect_error("robot:\n  gravity: [0, 0, -9.81\n  base_link: x\n",
+                 "3: robot.gravity: syntax error: did not find expected ',' or ']' (while parsing "
+                 "a flow sequence on line 2)");
+    /* The tab is met while libyaml still scans "a" (a plain scalar may go
+     * on over lines): the key named is base_link, the line the tab's. */
+    expect_error("robot:\n  base_link: a\n\tsensor_link: b\n",
+                 "3: robot.base_link: syntax error: found a tab character that violates "
+                 "indentation (while scanning a plain scalar on line 2)");
+    expect_error("robot:\n\tbase_link: a\n",
+                 "2: robot: syntax error: found character that cannot start any token");
+    expect_error("lcm:\n  url: \"udpm://x\n", "3: lcm.url: syntax error: found unexpected end of stream");
+    expect_error("robot:\n  base_link: a\n---\nrobot:\n  base_link: b\n",
+                 "3: (top level): a second YAML document: one document per file");
+    expect_error("robot:\n  base_link: &b base\n  sensor_link: *b\n",
+                 "3: robot.sensor_link: alias *b: aliases are not supported");
+    expect_error("robot:\n  base_link: &b base\n  gravity: [0, *b, 1]\n",
+                 "3: robot.gravity[1]: alias *b: aliases are not supported");
+    expect_error("robot:\n  base_link: \"a\xff\"\n",
+                 "2: (top level): syntax error: invalid leading UTF-8 octet");
+}
+
+static void wrong_types_name_key_and_line(void **state) {
+    (void)state;
+    expect_error("- robot\n- can\n", "1: (top level): expected a mapping of sections (robot:, can:, "
+                                     "...), got a sequence");
+    expect_error("just text\n", "1: (top level): expected a mapping of sections");
+    expect_error("\nrobot: 5\n", "2: robot: expected a mapping, got '5'");
+    expect_error("jr3:\n  full_scale: [1, 2, 3]\n", "2: jr3.full_scale: expected a mapping, got a sequence");
+    expect_error("estimation:\n  duration_s:\n    seconds: 2\n",
+                 "3: estimation.duration_s: expected a number, got a mapping");
+    expect_error("estimation:\n  duration_s: [2]\n",
+                 "2: estimation.duration_s: expected a number, got a sequence");
+    expect_error("estimation:\n  duration_s: \"1.5\"\n",
+                 "2: estimation.duration_s: expected a number, got the string \"1.5\"");
+    expect_error("estimation:\n  duration_s:\n",
+                 "2: estimation.duration_s: expected a number, got null");
+    expect_error("estimation:\n  duration_s: 1.5 s\n",
+                 "2: estimation.duration_s: expected a number, got '1.5 s'");
+    expect_error("robot:\n  gravity: {x: 0, y: 0, z: -9.81}\n",
+                 "2: robot.gravity: expected a sequence of 3 numbers, got a mapping");
+    expect_error("robot:\n  gravity: -9.81\n",
+                 "2: robot.gravity: expected a sequence of 3 numbers, got '-9.81'");
+    expect_error("robot:\n  gravity: [0, zero, -9.81]\n",
+                 "2: robot.gravity[1]: expected a number, got 'zero'");
+    expect_error("robot:\n  base_link: [a]\n",
+                 "2: robot.base_link: expected a string, got a sequence");
+    expect_error("robot:\n  sensor_link:\n", "2: robot.sensor_link: expected a string, got null");
+    expect_error("trajectory:\n  harmonics: 2.5\n",
+                 "2: trajectory.harmonics: expected an integer, got '2.5'");
+    expect_error("trajectory:\n  harmonics: 99999999999\n",
+                 "2: trajectory.harmonics: integer out of range");
+    expect_error("estimation:\n  methods: RTLS\n",
+                 "2: estimation.methods: expected a sequence, got 'RTLS'");
+    expect_error("estimation:\n  methods: [RTLS, [RIV]]\n",
+                 "2: estimation.methods[1]: expected a string, got a sequence");
+}
+
+static void wrong_lengths_and_values(void **state) {
+    (void)state;
+    expect_error("jr3:\n  full_scale:\n    force: [200, 200]\n",
+                 "3: jr3.full_scale.force: expected 3 numbers, got 2");
+    expect_error("distal:\n  phi: [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]\n",
+                 "2: distal.phi: expected 10 numbers, got 11");
+    expect_error("trajectory:\n  home: []\n", "2: trajectory.home: expected at least 1 number, got 0");
+    expect_error("trajectory:\n  acc_limit: [1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n",
+                 "2: trajectory.acc_limit: expected at most 16 numbers, got 17");
+    expect_error("jr3:\n  full_scale:\n    force: [200, 200, 200]\n    moment: [12, -12, 12]\n",
+                 "4: jr3.full_scale.moment[1]: must be > 0, got -12");
+    expect_error("jr3:\n  full_scale:\n    linear:\n      - 98.1\n      - 98.1\n      - 0\n",
+                 "6: jr3.full_scale.linear[2]: must be > 0, got 0");
+    expect_error("robot:\n  gravity: [0, 0, .nan]\n",
+                 "2: robot.gravity[2]: expected a finite number, got '.nan'");
+    expect_error("estimation:\n  duration_s: -.inf\n",
+                 "2: estimation.duration_s: expected a finite number, got '-.inf'");
+    expect_error("estimation:\n  duration_s: NaN\n",
+                 "2: estimation.duration_s: expected a finite number, got 'NaN'");
+    expect_error("estimation:\n  duration_s: 1e999\n",
+                 "2: estimation.duration_s: number out of range: '1e999'");
+    expect_error("estimation:\n  duration_s: 0\n", "2: estimation.duration_s: must be > 0, got 0");
+    expect_error("noise:\n  force: 0.1\n  torque: -0.005\n", "3: noise.torque: must be > 0, got -0.005");
+    expect_error("zeroing:\n  window_s: 0\n", "2: zeroing.window_s: must be > 0, got 0");
+    expect_error("kalman:\n  meas_sigma: 0\n", "2: kalman.meas_sigma: must be > 0, got 0");
+    expect_error("simulation:\n  backlash: -1e-4\n", "2: simulation.backlash: must be >= 0, got -0.0001");
+    expect_error("trajectory:\n  harmonics: 0\n", "2: trajectory.harmonics: must be >= 1, got 0");
+    expect_error("trajectory:\n  base_frequency: 0.5\n  harmonics: 5\n",
+                 "3: trajectory.harmonics: 5 harmonics of 0.5 Hz reach 2.5 Hz, above "
+                 "trajectory.max_frequency 2 Hz");
+    expect_error("trajectory:\n  max_frequency: 1\n",
+                 "2: trajectory.max_frequency: 4 harmonics of 0.5 Hz reach 2 Hz");
+    expect_error("trajectory:\n  vel_scale: 1.5\n", "2: trajectory.vel_scale: a fraction of the URDF");
+    expect_error("trajectory:\n  workspace:\n    min: [0, 0, 0]\n    max: [1, 1, 0]\n",
+                 "3: trajectory.workspace.min: workspace min must be below max on every axis: z: "
+                 "min 0 >= max 0");
+    expect_error("trajectory:\n  workspace:\n    max: [1, -2e9, 1]\n",
+                 "3: trajectory.workspace.max: workspace min must be below max on every axis: y");
+    expect_error("trajectory:\n  monte_carlo: 3\n", "2: trajectory.monte_carlo: 4 candidates to optimise "
+                                                    "out of 3 random ones");
+    expect_error("can:\n  interface: \"\"\n", "2: can.interface: a network interface name has 1 to 15");
+    expect_error("can:\n  interface: a_very_long_name0\n",
+                 "2: can.interface: a network interface name has 1 to 15 characters, got "
+                 "'a_very_long_name0'");
+    expect_error("lcm:\n  url: 239.255.76.67\n", "2: lcm.url: expected an LCM URL");
+    expect_error("robot:\n  base_link: "
+                 "a123456789012345678901234567890123456789012345678901234567890123\n",
+                 "2: robot.base_link: longer than 63 characters");
+}
+
+static void bad_names(void **state) {
+    (void)state;
+    expect_error("estimation:\n  methods: [RTLS, FOO]\n",
+                 "2: estimation.methods[1]: unknown method 'FOO' (RLS, RIV, RTLS, LS_BATCH or "
+                 "TLS_BATCH)");
+    expect_error("estimation:\n  methods: [rtls]\n", "2: estimation.methods[0]: unknown method 'rtls'");
+    expect_error("estimation:\n  methods:\n    - RTLS\n    - RIV\n    - RTLS\n",
+                 "5: estimation.methods[2]: method RTLS listed twice (first as item 0)");
+    expect_error("estimation:\n  methods: [RLS, RIV, RTLS, LS_BATCH, TLS_BATCH, RLS]\n",
+                 "2: estimation.methods[5]: method RLS listed twice (first as item 0)");
+    expect_error("estimation:\n  methods: []\n",
+                 "2: estimation.methods: expected at least one method, got none");
+    expect_error("estimation:\n  signals: accelerometer\n",
+                 "2: estimation.signals: unknown signal source 'accelerometer' (sensor, kf, "
+                 "setpoint or mixed)");
+    expect_error("estimation:\n  offset_model: both\n",
+                 "2: estimation.offset_model: unknown offset model 'both' (zeroing or estimate)");
+}
+
+static void duplicate_keys(void **state) {
+    (void)state;
+    expect_error("robot:\n  base_link: a\ncan:\n  interface: vcan1\nrobot:\n  sensor_link: b\n",
+                 "5: robot: duplicate key (first on line 1)");
+    expect_error("robot:\n  base_link: a\n  gravity: [0, 0, -9.81]\n  base_link: b\n",
+                 "4: robot.base_link: duplicate key (first on line 2)");
+    expect_error("jr3:\n  full_scale: {force: [1, 1, 1], \"force\": [2, 2, 2]}\n",
+                 "2: jr3.full_scale.force: duplicate key (first on line 2)");
+}
+
+static void unknown_keys_are_warnings(void **state) {
+    (void)state;
+    const char *path = write_file("unknown.yaml",
+                                  "robot:\n"
+                                  "  base_link: world\n"
+                                  "  sensorlink: tool0\n"       /* line 3: a typo */
+                                  "dashboard:\n"                /* line 4: another program's */
+                                  "  port: 8080\n"
+                                  "trajectory:\n"
+                                  "  workspace:\n"
+                                  "    min: [-1, -1, 0]\n"
+                                  "    mid: [0, 0, 0.5]\n"      /* line 9 */
+                                  "estimation:\n"
+                                  "  duration_s: 2\n");
+    loadid_config_t c;
+    warnings_t w;
+    load_ok(path, &c, &w);
+    assert_int_equal(w.count, 3);
+    char expected[600];
+    snprintf(expected, sizeof expected, "%s:3: robot.sensorlink: unknown key, ignored", path);
+    assert_string_equal(w.msg[0], expected);
+    snprintf(expected, sizeof expected, "%s:4: dashboard: unknown key, ignored", path);
+    assert_string_equal(w.msg[1], expected);
+    snprintf(expected, sizeof expected, "%s:9: trajectory.workspace.mid: unknown key, ignored", path);
+    assert_string_equal(w.msg[2], expected);
+    /* and the rest was read */
+    assert_string_equal(c.robot_base_link, "world");
+    assert_string_equal(c.robot_sensor_link, "ft_sensor");
+    assert_doubles(c.traj_workspace_min, (const double[]){-1, -1, 0}, 3, "workspace.min");
+    ASSERT_EQ_D(c.duration_s, 2);
+
+    /* No callback: still loads. */
+    char err[256] = "x";
+    assert_int_equal(loadid_config_load(path, &c, err, sizeof err, NULL, NULL), 0);
+    assert_string_equal(err, "");
+}
+
+static void unreadable_files(void **state) {
+    (void)state;
+    const char *missing = tmp_path("does_not_exist.yaml");
+    char err[1024], expected[1024];
+    loadid_config_t c;
+    memset(&c, 0x5a, sizeof c);
+    loadid_config_t before = c;
+    assert_int_equal(loadid_config_load(missing, &c, err, sizeof err, NULL, NULL), -1);
+    snprintf(expected, sizeof expected, "%s: cannot read: No such file or directory", missing);
+    assert_string_equal(err, expected);
+    assert_memory_equal(&c, &before, sizeof c);
+
+    const char *dir = make_dir("a_dir.yaml");
+    assert_int_equal(loadid_config_load(dir, &c, err, sizeof err, NULL, NULL), -1);
+    snprintf(expected, sizeof expected, "%s: cannot read: Is a directory", dir);
+    assert_string_equal(err, expected);
+
+    /* A failing load leaves cfg untouched. */
+    const char *bad = write_file("bad.yaml", "robot:\n  base_link: x\ncan:\n  base_id: 0x800\n");
+    assert_int_equal(loadid_config_load(bad, &c, err, sizeof err, NULL, NULL), -1);
+    assert_memory_equal(&c, &before, sizeof c);
+
+    /* Bad arguments, and a NULL error buffer. */
+    assert_int_equal(loadid_config_load(NULL, &c, err, sizeof err, NULL, NULL), -1);
+    assert_int_equal(loadid_config_load(EXAMPLE, NULL, err, sizeof err, NULL, NULL), -1);
+    assert_int_equal(loadid_config_load(bad, &c, NULL, 0, NULL, NULL), -1);
+    /* A short error buffer is truncated, NUL-terminated. */
+    char small[12];
+    assert_int_equal(loadid_config_load(bad, &c, small, sizeof small, NULL, NULL), -1);
+    assert_int_equal(strlen(small), sizeof small - 1);
+}
+
+/* --- The YAML tree itself ------------------------------------------------- */
+
+static loadid_yaml_doc_t *parse(const char *text) {
+    loadid_yaml_doc_t *doc = NULL;
+    char err[512];
+    const int rc = loadid_yaml_load_string("t.yaml", text, strlen(text), &doc, err, sizeof err);
+    if (rc) print_error("%s\n", err);
+    assert_int_equal(rc, 0);
+    return doc;
+}
+
+static void yaml_tree_nodes_and_lines(void **state) {
+    (void)state;
+    loadid_yaml_doc_t *doc = parse("# comment\n"
+                                   "joints:\n"
+                                   "  - name: j1\n"
+                                   "    coeffs: [[1, 2], [3, 4.5]]\n"
+                                   "  - name: j2\n"
+                                   "    coeffs:\n"
+                                   "      - [5, 6]\n"
+                                   "label: 'a\\b'\n"
+                                   "flag: True\n");
+    loadid_yaml_node_t *root = loadid_yaml_root(doc);
+    assert_int_equal(loadid_yaml_kind(root), LOADID_YAML_MAPPING);
+    assert_int_equal(loadid_yaml_count(root), 3);
+    assert_string_equal(loadid_yaml_file(doc), "t.yaml");
+    assert_string_equal(loadid_yaml_scalar(loadid_yaml_key_at(root, 2), NULL), "flag");
+    assert_null(loadid_yaml_key_at(root, 3));
+
+    loadid_yaml_node_t *joints = NULL;
+    assert_int_equal(loadid_yaml_get_sequence(root, "joints", &joints), 1);
+    assert_int_equal(loadid_yaml_count(joints), 2);
+    loadid_yaml_node_t *j2 = loadid_yaml_item(joints, 1);
+    assert_int_equal(loadid_yaml_line(j2), 5);
+    char name[8];
+    assert_int_equal(loadid_yaml_get_string(j2, "name", name, sizeof name), 1);
+    assert_string_equal(name, "j2");
+    loadid_yaml_node_t *coeffs = loadid_yaml_get(j2, "coeffs");
+    loadid_yaml_node_t *row = loadid_yaml_item(coeffs, 0);
+    assert_int_equal(loadid_yaml_line(row), 7);
+    char path[64];
+    assert_int_equal(loadid_yaml_path(row, path, sizeof path), strlen("joints[1].coeffs[0]"));
+    assert_string_equal(path, "joints[1].coeffs[0]");
+    loadid_yaml_path(root, path, sizeof path);
+    assert_string_equal(path, "(top level)");
+    loadid_yaml_path(row, path, 8); /* truncated */
+    assert_string_equal(path, "joints[");
+
+    double v[3];
+    size_t n = 0;
+    assert_int_equal(loadid_yaml_as_doubles(row, v, 1, 3, &n), 0);
+    assert_int_equal(n, 2);
+    assert_true(v[0] == 5 && v[1] == 6);
+
+    /* An error deep inside: its own path and line. */
+    loadid_yaml_node_t *j1 = loadid_yaml_item(joints, 0);
+    loadid_yaml_node_t *c1 = loadid_yaml_get(j1, "coeffs");
+    assert_int_equal(loadid_yaml_as_doubles(loadid_yaml_item(c1, 1), v, 3, 3, NULL), -EINVAL);
+    assert_string_equal(loadid_yaml_error(doc), "t.yaml:4: joints[0].coeffs[1]: expected 3 numbers, got 2");
+    assert_int_equal(loadid_yaml_as_doubles(c1, v, 2, 2, NULL), -EINVAL);
+    assert_string_equal(loadid_yaml_error(doc),
+                        "t.yaml:4: joints[0].coeffs[0]: expected a number, got a sequence");
+
+    char s[8];
+    assert_int_equal(loadid_yaml_get_string(root, "label", s, sizeof s), 1);
+    assert_string_equal(s, "a\\b");
+    int flag = 0;
+    assert_int_equal(loadid_yaml_get_bool(root, "flag", &flag), 1);
+    assert_int_equal(flag, 1);
+
+    /* Absent keys and absent sections read as 0 and change nothing. */
+    assert_int_equal(loadid_yaml_get_double(root, "nothing", &v[0]), 0);
+    assert_int_equal(loadid_yaml_get_double(NULL, "nothing", &v[0]), 0);
+    assert_true(v[0] == 5);
+    loadid_yaml_node_t *sub = root;
+    assert_int_equal(loadid_yaml_get_mapping(root, "nothing", &sub), 0);
+    assert_null(sub);
+
+    /* Unused keys: label and flag were read; j1's name was not. */
+    warnings_t w = {0};
+    assert_int_equal(loadid_yaml_report_unused(doc, collect, &w), 1);
+    assert_string_equal(w.msg[0], "t.yaml:3: joints[0].name: unknown key, ignored");
+    loadid_yaml_mark_used(loadid_yaml_value_at(j1, 0));
+    assert_int_equal(loadid_yaml_report_unused(doc, NULL, NULL), 0);
+    loadid_yaml_free(doc);
+}
+
+static void yaml_tree_scalars(void **state) {
+    (void)state;
+    loadid_yaml_doc_t *doc = parse("b1: false\nb2: FALSE\nb3: yes\n"
+                                   "u1: 18446744073709551615\nu2: 0xFFFFFFFFFFFFFFFF\n"
+                                   "u3: 18446744073709551616\nu4: +7\n"
+                                   "i1: -2147483648\ni2: 2147483648\ni3: -0x10\ni4: 1e3\n"
+                                   "d1: 7\nd2: -.5e-3\nd3: 1.\nd4: .\nd5: 0x10\nd6: !!str 3\n"
+                                   "d7: '3'\nd8: +.INF\n"
+                                   "s1: ''\ns2: \"x\\0y\"\ns3: 12345\nn1: ~\nn2: null\nl: |\n  two\n  lines\n");
+    loadid_yaml_node_t *r = loadid_yaml_root(doc);
+    int b = -1, i = 0;
+    uint64_t u = 0;
+    double d = 0;
+    char s[8];
+
+    assert_int_equal(loadid_yaml_get_bool(r, "b1", &b), 1);
+    assert_int_equal(b, 0);
+    assert_int_equal(loadid_yaml_get_bool(r, "b2", &b), 1);
+    assert_int_equal(loadid_yaml_get_bool(r, "b3", &b), -EINVAL);
+    assert_string_equal(loadid_yaml_error(doc), "t.yaml:3: b3: expected true or false, got 'yes'");
+
+    assert_int_equal(loadid_yaml_get_uint64(r, "u1", &u), 1);
+    assert_true(u == UINT64_MAX);
+    assert_int_equal(loadid_yaml_get_uint64(r, "u2", &u), 1);
+    assert_true(u == UINT64_MAX);
+    assert_int_equal(loadid_yaml_get_uint64(r, "u3", &u), -EINVAL);
+    assert_string_equal(loadid_yaml_error(doc), "t.yaml:6: u3: integer out of range: '18446744073709551616'");
+    assert_int_equal(loadid_yaml_get_uint64(r, "u4", &u), 1);
+    assert_true(u == 7);
+
+    assert_int_equal(loadid_yaml_get_int(r, "i1", &i), 1);
+    assert_int_equal(i, INT32_MIN);
+    assert_int_equal(loadid_yaml_get_int(r, "i2", &i), -EINVAL);
+    assert_prefix(loadid_yaml_error(doc), "t.yaml:9: i2: integer out of range");
+    assert_int_equal(loadid_yaml_get_int(r, "i3", &i), 1);
+    assert_int_equal(i, -16);
+    assert_int_equal(loadid_yaml_get_int(r, "i4", &i), -EINVAL);
+
+    assert_int_equal(loadid_yaml_get_double(r, "d1", &d), 1);
+    assert_true(d == 7);
+    assert_int_equal(loadid_yaml_get_double(r, "d2", &d), 1);
+    assert_true(d == -0.5e-3);
+    assert_int_equal(loadid_yaml_get_double(r, "d3", &d), 1);
+    assert_true(d == 1);
+    assert_int_equal(loadid_yaml_get_double(r, "d4", &d), -EINVAL);
+    assert_int_equal(loadid_yaml_get_double(r, "d5", &d), -EINVAL);
+    assert_string_equal(loadid_yaml_error(doc), "t.yaml:16: d5: expected a number, got '0x10'");
+    assert_int_equal(loadid_yaml_get_double(r, "d6", &d), -EINVAL);
+    assert_string_equal(loadid_yaml_error(doc), "t.yaml:17: d6: expected a number, got the string \"3\"");
+    assert_int_equal(loadid_yaml_get_double(r, "d7", &d), -EINVAL);
+    assert_int_equal(loadid_yaml_get_double(r, "d8", &d), -EINVAL);
+    assert_string_equal(loadid_yaml_error(doc), "t.yaml:19: d8: expected a finite number, got '+.INF'");
+    assert_true(d == 1); /* failures wrote nothing */
+
+    assert_int_equal(loadid_yaml_get_string(r, "s1", s, sizeof s), 1);
+    assert_string_equal(s, "");
+    assert_int_equal(loadid_yaml_get_string(r, "s2", s, sizeof s), -EINVAL);
+    assert_string_equal(loadid_yaml_error(doc), "t.yaml:21: s2: a string with a NUL character");
+    assert_int_equal(loadid_yaml_get_string(r, "s3", s, sizeof s), 1);
+    assert_string_equal(s, "12345");
+    assert_int_equal(loadid_yaml_get_string(r, "s3", s, 5), -EINVAL);
+    assert_string_equal(loadid_yaml_error(doc), "t.yaml:22: s3: longer than 4 characters");
+    assert_true(loadid_yaml_is_null(loadid_yaml_get(r, "n1")));
+    assert_true(loadid_yaml_is_null(loadid_yaml_get(r, "n2")));
+    assert_int_equal(loadid_yaml_get_string(r, "n2", s, sizeof s), -EINVAL);
+    /* A block scalar: the error message stays on one line. */
+    assert_int_equal(loadid_yaml_get_double(r, "l", &d), -EINVAL);
+    assert_string_equal(loadid_yaml_error(doc), "t.yaml:25: l: expected a number, got the string \"two?lines?\"");
+    /* Getters on something that is not a mapping. */
+    assert_int_equal(loadid_yaml_get_double(loadid_yaml_get(r, "d1"), "x", &d), -EINVAL);
+    assert_string_equal(loadid_yaml_error(doc), "t.yaml:12: d1: expected a mapping, got '7'");
+    loadid_yaml_free(doc);
+}
+
+static void yaml_tree_refuses(void **state) {
+    (void)state;
+    loadid_yaml_doc_t *doc = (loadid_yaml_doc_t *)1;
+    char err[1024];
+    /* Deep nesting. */
+    char deep[400];
+    size_t k = 0;
+    for (int i = 0; i < LOADID_YAML_MAX_DEPTH + 1; ++i) deep[k++] = '[';
+    for (int i = 0; i < LOADID_YAML_MAX_DEPTH + 1; ++i) deep[k++] = ']';
+    deep[k] = '\0';
+    assert_int_equal(loadid_yaml_load_string("d.yaml", deep, k, &doc, err, sizeof err), -EINVAL);
+    assert_null(doc);
+    assert_prefix(err, "d.yaml:1: ");
+    assert_non_null(strstr(err, ": nested deeper than 64 levels"));
+    /* A complex key. */
+    assert_int_equal(loadid_yaml_load_string("k.yaml", "a: 1\n? [x]\n: 2\n", 15, &doc, err, sizeof err),
+                     -EINVAL);
+    assert_string_equal(err, "k.yaml:2: (top level): a key must be a scalar, not a sequence");
+    /* Text that is not NUL-terminated is read up to len. */
+    assert_int_equal(loadid_yaml_load_string("n.yaml", "a: 12345", 5, &doc, err, sizeof err), 0);
+    int v = 0;
+    assert_int_equal(loadid_yaml_get_int(loadid_yaml_root(doc), "a", &v), 1);
+    assert_int_equal(v, 12);
+    loadid_yaml_free(doc);
+    loadid_yaml_free(NULL);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(shipped_example_is_the_defaults),
+        cmocka_unit_test(default_function_gives_the_defaults),
+        cmocka_unit_test(empty_files_give_the_defaults_with_a_warning),
+        cmocka_unit_test(every_key_is_read),
+        cmocka_unit_test(names_and_single_values),
+        cmocka_unit_test(hex_base_id),
+        cmocka_unit_test(relative_urdf_paths_follow_the_config_file),
+        cmocka_unit_test(syntax_errors_name_their_line),
+        cmocka_unit_test(wrong_types_name_key_and_line),
+        cmocka_unit_test(wrong_lengths_and_values),
+        cmocka_unit_test(bad_names),
+        cmocka_unit_test(duplicate_keys),
+        cmocka_unit_test(unknown_keys_are_warnings),
+        cmocka_unit_test(unreadable_files),
+        cmocka_unit_test(yaml_tree_nodes_and_lines),
+        cmocka_unit_test(yaml_tree_scalars),
+        cmocka_unit_test(yaml_tree_refuses),
+    };
+    return cmocka_run_group_tests(tests, setup_dir, remove_dir);
+}
