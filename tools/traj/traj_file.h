@@ -1,0 +1,66 @@
+/*
+ * The trajectory file of loadid-traj (YAML), read by loadid-sim: the
+ * Fourier coefficients and fades (fourier_traj.h), the limits it was
+ * designed for, and the achieved condition numbers. Also the 1 kHz
+ * setpoint samples as CSV.
+ *
+ *   format: loadid-trajectory-1
+ *   robot: {urdf: ..., base_link: ..., sensor_link: ..., joints: [names]}
+ *   base_frequency: 0.5       # Hz, f of eq. (10)
+ *   harmonics: 4
+ *   active_s: 1.5
+ *   fade_s: 0.5
+ *   fade_polynomial: "15 tau^4 - 24 tau^5 + 10 tau^6"
+ *   q0: [n numbers]           # eq. (11)
+ *   rho: [[N numbers] x n]    # sine coefficients, eq. (10)
+ *   delta: [[N numbers] x n]  # cosine coefficients
+ *   limits: {position_lower, position_upper, velocity, acceleration,
+ *            workspace_min, workspace_max, floor_z}
+ *   kappa_set: x              # kappa(D A T) over the active part at 1 kHz
+ *   kappa_upsilon: x          # kappa of eq. (12), = kappa_set^2
+ *   kappa_monte_carlo: x      # best Monte Carlo start (objective rate)
+ *   seed: n
+ */
+#ifndef LOADID_TRAJ_FILE_H
+#define LOADID_TRAJ_FILE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "fourier_traj.h"
+#include "loadid/chain.h"
+#include "traj_design.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    const char *urdf, *base_link, *sensor_link;
+    const loadid_chain_t *chain;  /* joint names */
+    double kappa_set, kappa_monte_carlo;
+    uint64_t seed;
+} loadid_traj_file_info_t;
+
+/* Writes the YAML. Returns 0 or -1 (errno set by stdio). */
+int loadid_traj_file_write(FILE *out, const loadid_fourier_traj_t *tr,
+                           const loadid_traj_limits_t *limits,
+                           const loadid_traj_file_info_t *info);
+
+/* Reads a trajectory file: the series and fades into tr, the joint names
+ * into names (LOADID_MAX_JOINTS x LOADID_NAME_MAX, may be NULL), kappa_set
+ * (may be NULL; NAN when absent). Returns 0, or a negative code with
+ * "FILE:LINE: KEY: what" (or "FILE: cannot read: ...") in err. */
+int loadid_traj_file_read(const char *path, loadid_fourier_traj_t *tr,
+                          char names[][LOADID_NAME_MAX], double *kappa_set, char *err,
+                          size_t errlen);
+
+/* Writes "t,q1..qn,qd1..qdn,qdd1..qddn" at rate_hz over [0, t_3]. */
+int loadid_traj_setpoints_write(FILE *out, const loadid_fourier_traj_t *tr, double rate_hz);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* LOADID_TRAJ_FILE_H */
