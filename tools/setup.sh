@@ -22,6 +22,9 @@ DEBIAN_PACKAGES=(
   libeigen3-dev libcmocka-dev
   # the robot model: URDF reader (kinematics of the sensor frame)
   liburdfdom-dev
+  # the wire formats: LCM (lcm-gen, the C library; lcm.pc requires glib's .pc)
+  # and can-utils (candump, canplayer)
+  liblcm-dev liblcm-bin libglib2.0-dev can-utils
   # the configuration (YAML, libyaml) and the trajectory designer's optimiser (NLopt)
   libyaml-dev libnlopt-dev
   # the Debian Python that makes build/venv (its packages come from PyPI)
