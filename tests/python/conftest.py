@@ -32,10 +32,12 @@ is not set, libloadid_urdf.so next to LOADID_CORE_LIB):
 from __future__ import annotations
 
 import ctypes
+import importlib
 import os
 import pathlib
 import shutil
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -535,3 +537,28 @@ def lib() -> ctypes.CDLL:
 def urdf_lib() -> ctypes.CDLL:
     """The URDF loader (loadid/urdf.h), LOADID_URDF_LIB."""
     return _load_urdf_library()
+
+
+# --------------------------------------------------------------------------
+# lcm-gen's Python output (the package `loadid` in the build tree)
+# --------------------------------------------------------------------------
+def _python_dir() -> pathlib.Path:
+    d = os.environ.get("LOADID_LCM_PYTHON_DIR")
+    if not d or not (pathlib.Path(d) / "loadid" / "__init__.py").is_file():
+        pytest.fail("LOADID_LCM_PYTHON_DIR must name the lcm-gen Python output "
+                    "(ctest sets it: <build>/proto/python, target loadid_lcmtypes_python)")
+    return pathlib.Path(d)
+
+
+@pytest.fixture(scope="session")
+def lcmtypes():
+    """The generated package `loadid`, imported from the build tree."""
+    d = str(_python_dir())
+    sys.path.insert(0, d)
+    try:
+        sys.modules.pop("loadid", None)
+        mod = importlib.import_module("loadid")
+        assert pathlib.Path(mod.__file__).resolve().is_relative_to(pathlib.Path(d).resolve())
+        yield mod
+    finally:
+        sys.path.remove(d)

@@ -24,34 +24,11 @@ import pathlib
 import re
 import shutil
 import subprocess
-import sys
 
 import pytest
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[2]
 TYPES = ["joint_state_t", "command_t", "estimate_t", "wrench_t", "status_t"]
-
-
-def _python_dir() -> pathlib.Path:
-    d = os.environ.get("LOADID_LCM_PYTHON_DIR")
-    if not d or not (pathlib.Path(d) / "loadid" / "__init__.py").is_file():
-        pytest.fail("LOADID_LCM_PYTHON_DIR must name the lcm-gen Python output "
-                    "(ctest sets it: <build>/proto/python, target loadid_lcmtypes_python)")
-    return pathlib.Path(d)
-
-
-@pytest.fixture(scope="module")
-def lcmtypes():
-    """The generated package `loadid`, imported from the build tree."""
-    d = str(_python_dir())
-    sys.path.insert(0, d)
-    try:
-        sys.modules.pop("loadid", None)
-        mod = importlib.import_module("loadid")
-        assert pathlib.Path(mod.__file__).resolve().is_relative_to(pathlib.Path(d).resolve())
-        yield mod
-    finally:
-        sys.path.remove(d)
 
 
 @pytest.fixture(scope="module")

@@ -274,7 +274,7 @@ static void trajectory_file_round_trips_and_refuses_damage(void **state) {
     int fd = mkstemp(path);
     assert_true(fd >= 0);
     FILE *f = fdopen(fd, "w");
-    loadid_traj_file_info_t info = {"robot.urdf", "base_link", "ft_sensor", &r.chain, 2.5, 7.5, 3};
+    loadid_traj_file_info_t info = {"robot.urdf", "base_link", "ft_sensor", &r.chain, 2.5, 7.5, 9.5, 3};
     assert_int_equal(loadid_traj_file_write(f, &tr, &r.p.limits, &info), 0);
     fclose(f);
     char names[LOADID_MAX_JOINTS][LOADID_NAME_MAX], err[512];

@@ -195,8 +195,11 @@ int main(int argc, char **argv) {
         return 1;
     }
     const double kappa_set = loadid_traj_kappa(&p, &tr, 1000);
+    loadid_traj_problem_t plain = p; /* the same data matrix without weights */
+    loadid_est_config_default(LOADID_METHOD_RLS, n_params, &plain.est);
     loadid_traj_file_info_t info = {cfg.robot_urdf, cfg.robot_base_link, cfg.robot_sensor_link,
-                                    &chain, kappa_set, res.kappa_monte_carlo, cfg.traj_seed};
+                                    &chain, kappa_set, res.kappa_monte_carlo,
+                                    loadid_traj_kappa(&plain, &tr, 1000), cfg.traj_seed};
     FILE *out = out_path ? fopen(out_path, "w") : stdout;
     if (!out || loadid_traj_file_write(out, &tr, &p.limits, &info) != 0 ||
         (out_path && fclose(out) != 0)) {

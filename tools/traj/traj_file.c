@@ -62,8 +62,10 @@ int loadid_traj_file_write(FILE *out, const loadid_fourier_traj_t *tr,
     key_list(out, "  ", "workspace_max", limits->ws_max, 3);
     fprintf(out, "  floor_z: ");
     number(out, limits->floor_z);
-    fprintf(out, "\nkappa_set: %.17g\nkappa_upsilon: %.17g\nkappa_monte_carlo: %.17g\n",
-            info->kappa_set, info->kappa_set * info->kappa_set, info->kappa_monte_carlo);
+    fprintf(out, "\nkappa_set: %.17g\nkappa_upsilon: %.17g\nkappa_set_plain: %.17g\n"
+                 "kappa_monte_carlo: %.17g\n",
+            info->kappa_set, info->kappa_set * info->kappa_set, info->kappa_set_plain,
+            info->kappa_monte_carlo);
     fprintf(out, "seed: %llu\n", (unsigned long long)info->seed);
     return ferror(out) ? -1 : 0;
 }

@@ -17,7 +17,8 @@
  *   limits: {position_lower, position_upper, velocity, acceleration,
  *            workspace_min, workspace_max, floor_z}
  *   kappa_set: x              # kappa(D A T) over the active part at 1 kHz
- *   kappa_upsilon: x          # kappa of eq. (12), = kappa_set^2
+ *   kappa_upsilon: x          # kappa of eq. (12) with the weights, = kappa_set^2
+ *   kappa_set_plain: x        # kappa(A) without weights (loadid-kappa's)
  *   kappa_monte_carlo: x      # best Monte Carlo start (objective rate)
  *   seed: n
  */
@@ -40,6 +41,7 @@ typedef struct {
     const char *urdf, *base_link, *sensor_link;
     const loadid_chain_t *chain;  /* joint names */
     double kappa_set, kappa_monte_carlo;
+    double kappa_set_plain;       /* kappa of A without weights */
     uint64_t seed;
 } loadid_traj_file_info_t;
 
