@@ -317,8 +317,10 @@ int loadid_traj_design(const loadid_traj_problem_t *p, const loadid_traj_search_
     bounds(&S);
     memset(result, 0, sizeof *result);
 
-    /* Monte Carlo: random coefficients inside the bounds, scaled up or down
-     * to the joint limits, shrunk further while the workspace is broken. */
+    /* Monte Carlo: random coefficients inside the bounds, scaled to 85 % of
+     * what the joint limits allow (a candidate on a limit leaves COBYLA no
+     * room: seen stuck within 1 % of its start), shrunk further while the
+     * workspace is broken. */
     loadid_rng_t rng;
     loadid_rng_seed(&rng, s->seed);
     for (int m = 0; m < s->monte_carlo; ++m) {
@@ -326,7 +328,7 @@ int loadid_traj_design(const loadid_traj_problem_t *p, const loadid_traj_search_
             x[j] = S.lb[j] + (S.ub[j] - S.lb[j]) * loadid_rng_uniform(&rng);
         loadid_fourier_traj_t cand;
         unpack(&S, x, &cand);
-        scale_series(&cand, joint_scale(&S, &cand));
+        scale_series(&cand, 0.85 * joint_scale(&S, &cand));
         double e = excess(&S, &cand);
         for (int shrink = 0; shrink < 6 && e > 0; ++shrink) {
             scale_series(&cand, 0.7);

@@ -1,0 +1,47 @@
+#!/bin/sh
+# The tools end to end on every build (release and the sanitizers): design
+# a trajectory, simulate a clean and a damaged recording (every kind of
+# damage at once), compute their condition numbers, and refuse bad input
+# with a message and a non-zero exit. Sanitizer findings fail the run.
+# Usage: tools_pipeline.sh TRAJ SIM KAPPA WORKDIR
+set -eu
+traj=$1 sim=$2 kappa=$3 work=$4
+rm -rf "$work" && mkdir -p "$work"
+
+"$traj" --monte-carlo 40 --candidates 1 --max-evals 80 --quiet --out "$work/traj.yaml" \
+    --setpoints "$work/setpoints.csv"
+"$sim" --trajectory "$work/traj.yaml" --out "$work/clean"
+"$sim" --trajectory "$work/traj.yaml" --out "$work/damaged" --damage bit-errors=0.05 \
+    --damage drop-frames=0.02 --damage skip-samples=0.01 --damage saturate=0.01 \
+    --damage fault=0.01 --damage bad-frames=0.01 --damage nan-joints=0.01 \
+    --damage stall-joints=1.0:1.1
+for f in can.log lcm.log truth.yaml; do
+    test -s "$work/clean/$f" && test -s "$work/damaged/$f"
+done
+"$kappa" "$work/clean" "$work/damaged" > "$work/kappa.txt"
+test "$(wc -l < "$work/kappa.txt")" -eq 3
+
+# Bad input: a clear one-line reason and exit status 1 or 2, never a crash.
+expect_refusal() {
+    set +e
+    "$@" > "$work/out.txt" 2> "$work/err.txt"
+    rc=$?
+    set -e
+    if [ "$rc" -ne 1 ] && [ "$rc" -ne 2 ]; then
+        echo "expected exit 1 or 2 from: $*; got $rc" >&2
+        cat "$work/err.txt" >&2
+        exit 1
+    fi
+    grep -q . "$work/err.txt" || { echo "no message from: $*" >&2; exit 1; }
+}
+printf 'format: loadid-trajectory-1\nq0: [0, 0]\n' > "$work/short.yaml"
+printf 'robot: [not, a, mapping]\n' > "$work/bad_config.yaml"
+expect_refusal "$sim" --trajectory "$work/short.yaml" --out "$work/x"
+expect_refusal "$sim" --trajectory "$work/missing.yaml" --out "$work/x"
+expect_refusal "$sim" --trajectory "$work/traj.yaml" --out "$work/x" --damage melt=1
+expect_refusal "$sim" --config "$work/bad_config.yaml" --trajectory "$work/traj.yaml" --out "$work/x"
+expect_refusal "$traj" --config "$work/bad_config.yaml"
+grep -q "bad_config.yaml:1: robot" "$work/err.txt" || { cat "$work/err.txt" >&2; exit 1; }
+expect_refusal "$traj" --monte-carlo 0
+expect_refusal "$kappa" "$work/nothing"
+echo "tools pipeline: ok"
