@@ -14,7 +14,8 @@ rm -rf "$work" && mkdir -p "$work"
 "$sim" --trajectory "$work/traj.yaml" --out "$work/damaged" --damage bit-errors=0.05 \
     --damage drop-frames=0.02 --damage skip-samples=0.01 --damage saturate=0.01 \
     --damage fault=0.01 --damage bad-frames=0.01 --damage nan-joints=0.01 \
-    --damage stall-joints=1.0:1.1
+    --damage stall-joints=1.0:1.1 --load-phi 2,0.1,0,0.05,0.01,0,0,0.012,0,0.008
+grep -q "phi: \[2, 0.10000000000000001, 0, 0.050000000000000003" "$work/damaged/truth.yaml"
 for f in can.log lcm.log truth.yaml; do
     test -s "$work/clean/$f" && test -s "$work/damaged/$f"
 done
@@ -43,5 +44,6 @@ expect_refusal "$sim" --config "$work/bad_config.yaml" --trajectory "$work/traj.
 expect_refusal "$traj" --config "$work/bad_config.yaml"
 grep -q "bad_config.yaml:1: robot" "$work/err.txt" || { cat "$work/err.txt" >&2; exit 1; }
 expect_refusal "$traj" --monte-carlo 0
+expect_refusal "$sim" --trajectory "$work/traj.yaml" --out "$work/x" --load-phi 1,2,3
 expect_refusal "$kappa" "$work/nothing"
 echo "tools pipeline: ok"

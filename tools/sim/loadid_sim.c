@@ -50,7 +50,7 @@ static void usage(FILE *out) {
     fprintf(out,
             "usage: %s --trajectory TRAJ.yaml --out DIR [--config FILE] [--seed N]\n"
             "                  [--load-name NAME] [--start-utime US] [--damage KIND=VALUE]...\n"
-            "                  [--values FILE.csv]\n"
+            "                  [--values FILE.csv] [--load-phi m,mcx,mcy,mcz,Ixx,Ixy,Ixz,Iyy,Iyz,Izz]\n"
             "Simulates a recording (can.log, lcm.log, truth.yaml in DIR) of the configured\n"
             "robot (robot.*) following the trajectory of loadid-traj with the load\n"
             "simulation.load_phi (default the paper's o1) and the distal part distal.phi,\n"
@@ -59,6 +59,7 @@ static void usage(FILE *out) {
             "--damage writes a deliberately damaged recording; KIND is one of\n"
             "  drop-frames=P skip-samples=P bit-errors=P saturate=P fault=P bad-frames=P\n"
             "  nan-joints=P stall-joints=T0:T1 (seconds); may be repeated.\n"
+            "--load-phi overrides simulation.load_phi (eq. 5, inertia about the origin of S).\n"
             "--values writes what each CAN sample encodes, in SI (t_us, sequence, f, tau,\n"
             "a - g, alpha), before rounding to counts.\n",
             prog);
@@ -278,9 +279,24 @@ static int write_truth(const sim_t *s, const char *dir, const char *traj_path,
     return -e;
 }
 
+/* Ten comma-separated finite numbers. */
+static int parse_phi(const char *text, double phi[10]) {
+    const char *p = text;
+    for (int i = 0; i < 10; ++i) {
+        char *end;
+        errno = 0;
+        phi[i] = strtod(p, &end);
+        if (errno || end == p || !isfinite(phi[i])) return -1;
+        if (i < 9 && *end != ',') return -1;
+        p = end + (i < 9);
+        if (i == 9 && *end) return -1;
+    }
+    return 0;
+}
+
 int main(int argc, char **argv) {
     const char *config_path = NULL, *traj_path = NULL, *out_dir = NULL, *load_name = "o1";
-    const char *values_path = NULL;
+    const char *values_path = NULL, *load_phi = NULL;
     long long seed = -1, t0 = 1700000000000000LL;
     static sim_t s;
     loadid_damage_init(&s.damage, 0);
@@ -290,6 +306,7 @@ int main(int argc, char **argv) {
         {"out", required_argument, NULL, 'o'},       {"seed", required_argument, NULL, 'S'},
         {"load-name", required_argument, NULL, 'l'}, {"start-utime", required_argument, NULL, 'u'},
         {"damage", required_argument, NULL, 'd'},    {"values", required_argument, NULL, 'v'},
+        {"load-phi", required_argument, NULL, 'p'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
     int c;
@@ -301,6 +318,7 @@ int main(int argc, char **argv) {
             case 'o': out_dir = optarg; break;
             case 'l': load_name = optarg; break;
             case 'v': values_path = optarg; break;
+            case 'p': load_phi = optarg; break;
             case 'S':
             case 'u': {
                 errno = 0;
@@ -331,6 +349,10 @@ int main(int argc, char **argv) {
     if (config_path && loadid_config_load(config_path, &s.cfg, err, sizeof err, warn, NULL) != 0) {
         fprintf(stderr, "%s: %s\n", prog, err);
         return 1;
+    }
+    if (load_phi && parse_phi(load_phi, s.cfg.sim_load_phi) != 0) {
+        fprintf(stderr, "%s: --load-phi: expected 10 comma-separated numbers: %s\n", prog, load_phi);
+        return 2;
     }
     const uint64_t the_seed = seed >= 0 ? (uint64_t)seed : s.cfg.sim_seed;
     if (loadid_urdf_load_file(s.cfg.robot_urdf, s.cfg.robot_base_link, s.cfg.robot_sensor_link,
