@@ -29,7 +29,7 @@
 #include "loadid/core.h"
 #include "loadid/jr3.h"
 #include "loadid/recording.h"
-#include "loadid/urdf.h"
+#include "tool_setup.h"
 
 static const char *prog = "loadid-kappa";
 static int weighted; /* --weighted: the estimator's D and T, else D = I, T = I */
@@ -60,11 +60,6 @@ static void usage(FILE *out) {
             "Upsilon = A^T A has kappa^2). --weighted gives kappa of D A T with the\n"
             "estimator's weights from noise.* instead (estimate_t.condition_number).\n",
             prog);
-}
-
-static void warn(void *ctx, const char *msg) {
-    (void)ctx;
-    fprintf(stderr, "%s: warning: %s\n", prog, msg);
 }
 
 static int data_matrix(const kappa_run_t *k, const loadid_real_t spec[3],
@@ -143,11 +138,8 @@ static int run(const loadid_config_t *cfg, const loadid_chain_t *chain, const ch
     scfg.measured.jerk_psd = scfg.setpoint.jerk_psd = (loadid_real_t)cfg->kalman_jerk_psd;
     scfg.measured.meas_sigma = scfg.setpoint.meas_sigma = (loadid_real_t)cfg->kalman_meas_sigma;
     scfg.max_joint_age_us = (int64_t)llround(cfg->kalman_max_joint_age_s * 1e6);
-    loadid_jr3_config_t jcfg = {.base_id = cfg->can_base_id};
-    memcpy(jcfg.full_scale[0], cfg->jr3_fs_force, sizeof jcfg.full_scale[0]);
-    memcpy(jcfg.full_scale[1], cfg->jr3_fs_moment, sizeof jcfg.full_scale[1]);
-    memcpy(jcfg.full_scale[2], cfg->jr3_fs_linear, sizeof jcfg.full_scale[2]);
-    memcpy(jcfg.full_scale[3], cfg->jr3_fs_angular, sizeof jcfg.full_scale[3]);
+    loadid_jr3_config_t jcfg;
+    loadid_tool_jr3_config(cfg, &jcfg);
     loadid_est_config_t ecfg;
     loadid_est_config_default(LOADID_METHOD_RLS, k->n_params, &ecfg);
     if (weighted)
@@ -220,18 +212,8 @@ int main(int argc, char **argv) {
         return 2;
     }
     static loadid_config_t cfg;
-    char err[1024];
-    loadid_config_default(&cfg);
-    if (config_path && loadid_config_load(config_path, &cfg, err, sizeof err, warn, NULL) != 0) {
-        fprintf(stderr, "%s: %s\n", prog, err);
-        return 1;
-    }
     loadid_chain_t chain;
-    if (loadid_urdf_load_file(cfg.robot_urdf, cfg.robot_base_link, cfg.robot_sensor_link, &chain,
-                              err, sizeof err) != 0) {
-        fprintf(stderr, "%s: %s\n", prog, err);
-        return 1;
-    }
+    if (loadid_tool_setup(prog, config_path, &cfg, &chain) != 0) return 1;
     printf("%-28s %-10s %8s %10s %10s %10s\n", "recording", "load", "samples", "kappa_set",
            "kappa_sens", "kappa_kf");
     int failed = 0;

@@ -30,7 +30,7 @@
 #include "loadid/config.h"
 #include "loadid/core.h"
 #include "loadid/jr3.h"
-#include "loadid/urdf.h"
+#include "tool_setup.h"
 #include "loadid_synth.h"
 #include "recording_writer.h"
 #include "servo.h"
@@ -63,11 +63,6 @@ static void usage(FILE *out) {
             "--values writes what each CAN sample encodes, in SI (t_us, sequence, f, tau,\n"
             "a - g, alpha), before rounding to counts.\n",
             prog);
-}
-
-static void warn(void *ctx, const char *msg) {
-    (void)ctx;
-    fprintf(stderr, "%s: warning: %s\n", prog, msg);
 }
 
 typedef struct {
@@ -345,21 +340,12 @@ int main(int argc, char **argv) {
         usage(stderr);
         return 2;
     }
-    loadid_config_default(&s.cfg);
-    if (config_path && loadid_config_load(config_path, &s.cfg, err, sizeof err, warn, NULL) != 0) {
-        fprintf(stderr, "%s: %s\n", prog, err);
-        return 1;
-    }
+    if (loadid_tool_setup(prog, config_path, &s.cfg, &s.chain) != 0) return 1;
     if (load_phi && parse_phi(load_phi, s.cfg.sim_load_phi) != 0) {
         fprintf(stderr, "%s: --load-phi: expected 10 comma-separated numbers: %s\n", prog, load_phi);
         return 2;
     }
     const uint64_t the_seed = seed >= 0 ? (uint64_t)seed : s.cfg.sim_seed;
-    if (loadid_urdf_load_file(s.cfg.robot_urdf, s.cfg.robot_base_link, s.cfg.robot_sensor_link,
-                              &s.chain, err, sizeof err) != 0) {
-        fprintf(stderr, "%s: %s\n", prog, err);
-        return 1;
-    }
     char names[LOADID_MAX_JOINTS][LOADID_NAME_MAX];
     if (loadid_traj_file_read(traj_path, &s.traj, names, &s.kappa_set, err, sizeof err) != 0) {
         fprintf(stderr, "%s: %s\n", prog, err);
@@ -383,11 +369,7 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s: cannot build the kinematics\n", prog);
         return 1;
     }
-    s.jr3.base_id = s.cfg.can_base_id;
-    memcpy(s.jr3.full_scale[0], s.cfg.jr3_fs_force, sizeof s.jr3.full_scale[0]);
-    memcpy(s.jr3.full_scale[1], s.cfg.jr3_fs_moment, sizeof s.jr3.full_scale[1]);
-    memcpy(s.jr3.full_scale[2], s.cfg.jr3_fs_linear, sizeof s.jr3.full_scale[2]);
-    memcpy(s.jr3.full_scale[3], s.cfg.jr3_fs_angular, sizeof s.jr3.full_scale[3]);
+    loadid_tool_jr3_config(&s.cfg, &s.jr3);
     if (loadid_jr3_config_check(&s.jr3) != 0) {
         fprintf(stderr, "%s: invalid JR3 configuration\n", prog);
         return 1;

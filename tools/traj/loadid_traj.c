@@ -18,7 +18,7 @@
 
 #include "loadid/config.h"
 #include "loadid/core.h"
-#include "loadid/urdf.h"
+#include "tool_setup.h"
 #include "traj_design.h"
 #include "traj_file.h"
 
@@ -36,11 +36,6 @@ static void usage(FILE *out) {
             "prints kappa_set, the condition number of the estimator's weighted data\n"
             "matrix over the active part, on stderr. Options override trajectory.*.\n",
             prog);
-}
-
-static void warn(void *ctx, const char *msg) {
-    (void)ctx;
-    fprintf(stderr, "%s: warning: %s\n", prog, msg);
 }
 
 /* Progress on stderr: one line rewritten in place on a terminal, else a
@@ -119,23 +114,12 @@ int main(int argc, char **argv) {
     }
 
     loadid_config_t cfg;
-    char err[1024];
-    loadid_config_default(&cfg);
-    if (config_path && loadid_config_load(config_path, &cfg, err, sizeof err, warn, NULL) != 0) {
-        fprintf(stderr, "%s: %s\n", prog, err);
-        return 1;
-    }
+    loadid_chain_t chain;
+    if (loadid_tool_setup(prog, config_path, &cfg, &chain) != 0) return 1;
     if (seed >= 0) cfg.traj_seed = (uint64_t)seed;
     if (mc > 0) cfg.traj_monte_carlo = (int)mc;
     if (cand > 0) cfg.traj_candidates = (int)cand;
     if (evals >= 0) cfg.traj_max_evals = (int)evals;
-
-    loadid_chain_t chain;
-    if (loadid_urdf_load_file(cfg.robot_urdf, cfg.robot_base_link, cfg.robot_sensor_link, &chain,
-                              err, sizeof err) != 0) {
-        fprintf(stderr, "%s: %s\n", prog, err);
-        return 1;
-    }
     const int n = chain.num_joints;
     if (cfg.traj_num_acc_limits && cfg.traj_num_acc_limits != n) {
         fprintf(stderr, "%s: trajectory.acc_limit has %d values, the robot %d joints\n", prog,
