@@ -78,6 +78,8 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->kalman_jerk_psd = (double)jf.jerk_psd;
     cfg->kalman_meas_sigma = (double)jf.meas_sigma;
     cfg->kalman_max_joint_age_s = (double)sig.max_joint_age_us / 1e6;
+    cfg->kalman_spec_sigma = 0.5;
+    cfg->kalman_alpha_sigma = 1.0;
 
     cfg->traj_base_frequency = 0.5;
     cfg->traj_harmonics = 4;
@@ -364,6 +366,8 @@ static int read_estimation(loadid_yaml_node_t *root, loadid_config_t *c) {
     TRY(read_number(s, "jerk_psd", &c->kalman_jerk_psd, POSITIVE));
     TRY(read_number(s, "meas_sigma", &c->kalman_meas_sigma, POSITIVE));
     TRY(read_number(s, "max_joint_age_s", &c->kalman_max_joint_age_s, POSITIVE));
+    TRY(read_number(s, "spec_sigma", &c->kalman_spec_sigma, POSITIVE));
+    TRY(read_number(s, "alpha_sigma", &c->kalman_alpha_sigma, POSITIVE));
     return 0;
 fail:
     return -EINVAL;

@@ -562,3 +562,19 @@ def lcmtypes():
         yield mod
     finally:
         sys.path.remove(d)
+
+
+# --------------------------------------------------------------------------
+# A designed trajectory and a clean simulated recording, shared by the
+# tests of the tools and of the service (tools run once per session)
+# --------------------------------------------------------------------------
+@pytest.fixture(scope="session")
+def trajectory(tmp_path_factory):
+    from recordings import make_trajectory
+    return make_trajectory(tmp_path_factory.mktemp("traj"))
+
+
+@pytest.fixture(scope="session")
+def recording(tmp_path_factory, trajectory):
+    from recordings import simulate
+    return simulate(tmp_path_factory.mktemp("rec") / "clean", trajectory)

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import csv
 import math
-import os
 import pathlib
 import re
 import shutil
@@ -29,62 +28,11 @@ import subprocess
 import numpy as np
 import pytest
 
+from recordings import damage_count, program, read_truth, run_tool, simulate
+
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[2]
 FULL_SCALE = {0: [200.0] * 3, 1: [12.0] * 3, 2: [98.1] * 3, 3: [1000.0] * 3}
 CANDUMP = re.compile(r"^\((\d+)\.(\d{6})\) (\S+) ([0-9A-F]{3})#([0-9A-F]*)$")
-
-
-def _exe(var: str) -> str:
-    path = os.environ.get(var)
-    if not path or not os.path.isfile(path):
-        pytest.fail(f"{var} must name the program (ctest sets it)")
-    return path
-
-
-def _run(args, **kw):
-    return subprocess.run([str(a) for a in args], capture_output=True, text=True, check=True,
-                          timeout=300, **kw)
-
-
-@pytest.fixture(scope="session")
-def trajectory(tmp_path_factory):
-    d = tmp_path_factory.mktemp("traj")
-    _run([_exe("LOADID_TRAJ_EXE"), "--monte-carlo", "300", "--candidates", "1",
-          "--max-evals", "800", "--out", d / "traj.yaml", "--setpoints", d / "setpoints.csv",
-          "--quiet"])
-    return d
-
-
-def simulate(out_dir, trajectory, *extra):
-    _run([_exe("LOADID_SIM_EXE"), "--trajectory", trajectory / "traj.yaml", "--out", out_dir,
-          "--values", out_dir / "values.csv", *extra])
-    return out_dir
-
-
-@pytest.fixture(scope="session")
-def recording(tmp_path_factory, trajectory):
-    return simulate(tmp_path_factory.mktemp("rec") / "clean", trajectory)
-
-
-def read_truth(rec) -> dict:
-    """The few keys of truth.yaml the tests need (flat 'key: value' lines
-    under their section), without a YAML library."""
-    truth, section = {}, None
-    for line in (rec / "truth.yaml").read_text().splitlines():
-        m = re.match(r"^(\w[\w-]*):\s*(.*)$", line)
-        if m:
-            section = m.group(1)
-            if m.group(2) and not m.group(2).startswith("#"):
-                truth[section] = m.group(2)
-            continue
-        m = re.match(r"^  ([\w-]+):\s*(.*)$", line)
-        if m and section:
-            truth[f"{section}.{m.group(1)}"] = m.group(2)
-    return truth
-
-
-def damage_count(truth, kind) -> int:
-    return int(re.search(r"count: (\d+)", truth[f"damage.{kind}"]).group(1))
 
 
 def read_values(rec):
@@ -94,7 +42,7 @@ def read_values(rec):
 
 
 def decode_project(rec):
-    out = _run([_exe("LOADID_JR3_DECODE_LOG"), rec / "can.log"]).stdout
+    out = run_tool([program("LOADID_JR3_DECODE_LOG"), rec / "can.log"]).stdout
     samples, stats, bad = {}, {}, 0
     for line in out.splitlines():
         f = line.split()
@@ -167,7 +115,7 @@ def test_log2asc_accepts_every_line(recording, tmp_path):
     log2asc = shutil.which("log2asc")
     if log2asc is None:
         pytest.fail("log2asc (Debian can-utils) is missing: tools/setup.sh installs it")
-    _run([log2asc, "-I", recording / "can.log", "-O", tmp_path / "out.asc", "vcan0"])
+    run_tool([log2asc, "-I", recording / "can.log", "-O", tmp_path / "out.asc", "vcan0"])
     asc = (tmp_path / "out.asc").read_text().splitlines()
     rx = [line for line in asc if " Rx " in line]
     assert len(rx) == len((recording / "can.log").read_text().splitlines())
@@ -295,10 +243,10 @@ def test_kappa_table_structure(recording, trajectory, tmp_path):
     noisy_cfg.write_text("noise:\n  linear: 3.0\n  angular: 40.0\n"
                          "simulation:\n  vibration_linear: 2.0\n  vibration_angular: 20.0\n")
     noisy = tmp_path / "noisy"
-    _run([_exe("LOADID_SIM_EXE"), "--config", noisy_cfg, "--trajectory",
+    run_tool([program("LOADID_SIM_EXE"), "--config", noisy_cfg, "--trajectory",
           trajectory / "traj.yaml", "--out", noisy])
-    out = _run([_exe("LOADID_KAPPA_EXE"), recording, noisy]).stdout.splitlines()
-    weighted = _run([_exe("LOADID_KAPPA_EXE"), "--weighted", recording]).stdout.splitlines()
+    out = run_tool([program("LOADID_KAPPA_EXE"), recording, noisy]).stdout.splitlines()
+    weighted = run_tool([program("LOADID_KAPPA_EXE"), "--weighted", recording]).stdout.splitlines()
     assert out[0].split() == ["recording", "load", "samples", "kappa_set", "kappa_sens",
                               "kappa_kf"]
     rows = [line.split() for line in out[1:]]
@@ -320,6 +268,6 @@ def test_kappa_table_structure(recording, trajectory, tmp_path):
 
 
 def test_kappa_refuses_a_missing_recording(tmp_path):
-    r = subprocess.run([_exe("LOADID_KAPPA_EXE"), tmp_path / "nothing"], capture_output=True,
+    r = subprocess.run([program("LOADID_KAPPA_EXE"), tmp_path / "nothing"], capture_output=True,
                        text=True, timeout=60)
     assert r.returncode != 0 and "cannot read" in r.stderr

@@ -186,6 +186,8 @@ static void assert_defaults(const loadid_config_t *c) {
     const double sigma = 2 * 3.14159265358979323846 / 1048576.0 / sqrt(12.0);
     assert_true(fabs(c->kalman_meas_sigma - sigma) <= 1e-6 * sigma);
     ASSERT_EQ_D(c->kalman_max_joint_age_s, 0.005);
+    ASSERT_EQ_D(c->kalman_spec_sigma, 0.5);
+    ASSERT_EQ_D(c->kalman_alpha_sigma, 1.0);
 
     ASSERT_EQ_D(c->traj_base_frequency, 0.5);
     assert_int_equal(c->traj_harmonics, 4);
@@ -308,6 +310,8 @@ static const char kEveryKey[] =
     "  jerk_psd: 5000\n"
     "  meas_sigma: 1e-5\n"
     "  max_joint_age_s: 0.002\n"
+    "  spec_sigma: 0.25\n"
+    "  alpha_sigma: 3.0\n"
     "trajectory:\n"
     "  base_frequency: 0.25\n"
     "  harmonics: 6\n"
@@ -383,6 +387,8 @@ static void every_key_is_read(void **state) {
     ASSERT_EQ_D(c.kalman_jerk_psd, 5000);
     ASSERT_EQ_D(c.kalman_meas_sigma, 1e-5);
     ASSERT_EQ_D(c.kalman_max_joint_age_s, 0.002);
+    ASSERT_EQ_D(c.kalman_spec_sigma, 0.25);
+    ASSERT_EQ_D(c.kalman_alpha_sigma, 3.0);
 
     ASSERT_EQ_D(c.traj_base_frequency, 0.25);
     assert_int_equal(c.traj_harmonics, 6);

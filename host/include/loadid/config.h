@@ -89,6 +89,14 @@ typedef struct {
     double kalman_jerk_psd;             /* default: loadid_jf_config_default */
     double kalman_meas_sigma;           /* default: loadid_jf_config_default */
     double kalman_max_joint_age_s;      /* default 0.005 */
+    /* Noise of what the filters and the kinematics derive, for the
+     * estimators' weights when a - g or alpha come from the joints (the
+     * kf, setpoint and mixed sources; the JR3's own are noise.linear and
+     * noise.angular): a - g [m/s^2], default 0.5; alpha [rad/s^2],
+     * default 1 (the filter's q'' error on a 2 Hz trajectory with 2^20
+     * counts is about 1 rad/s^2 per joint). */
+    double kalman_spec_sigma;
+    double kalman_alpha_sigma;
 
     /* trajectory: (loadid) the excitation designer, loadid-traj */
     double traj_base_frequency;         /* f of eq. (10) [Hz], default 0.5 */

@@ -1,0 +1,137 @@
+/*
+ * The estimation pipeline of loadidd, the same for the live service and
+ * --offline: JR3 frames, joint states and commands in, in time order;
+ * estimates, compensated wrenches and state changes out through callbacks.
+ *
+ *   frames  -> JR3 decoder (drivers/jr3.h): only complete, unsaturated,
+ *              fault-free samples go on; everything else is counted
+ *   joints  -> joint filters (firmware signals.h): wrong count, NaN, time
+ *              going backwards refused and counted
+ *   sample  -> by state:
+ *     ZEROING     wrench averaged over zeroing.window_s; g_init, gravity in
+ *                 S from the forward kinematics of the measured joints
+ *                 (eqs. 7-9)
+ *     ESTIMATING  signal source -> regressor of eq. (6) with the zeroing
+ *                 term (or [A E6]) -> every configured estimator; RIV's
+ *                 instruments from the setpoints; estimation.duration_s
+ *                 after START (or STOP) -> DONE
+ *     DONE        wrench_t: measured wrench minus what the final estimate
+ *                 (load and distal part, and offset) predicts
+ *   commands ZERO, START, STOP, RESET drive IDLE -> ZEROING -> ESTIMATING
+ *   -> DONE, or FAILED with a reason.
+ * The distal sensor part (distal.phi) is estimated with the load and
+ * subtracted from what is reported. After create nothing here allocates.
+ */
+#ifndef LOADID_PIPELINE_H
+#define LOADID_PIPELINE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "loadid/can_frame.h"
+#include "loadid/chain.h"
+#include "loadid/config.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* States, the values of estimate_t's constants (DESIGN.md). */
+enum {
+    LOADID_STATE_IDLE = 0,
+    LOADID_STATE_ZEROING = 1,
+    LOADID_STATE_ESTIMATING = 2,
+    LOADID_STATE_DONE = 3,
+    LOADID_STATE_FAILED = 4
+};
+
+/* Commands, command_t's constants. */
+enum { LOADID_CMD_ZERO = 1, LOADID_CMD_START = 2, LOADID_CMD_STOP = 3, LOADID_CMD_RESET = 4 };
+
+#define LOADID_LOAD_NAME_MAX 128
+
+/* One method's estimate, the fields of estimate_t. */
+typedef struct {
+    int64_t utime;                /* newest sample used */
+    int64_t samples;
+    int method;                   /* loadid_method_t */
+    int state;
+    char load_name[LOADID_LOAD_NAME_MAX];
+    double phi[10];               /* the load: distal part removed */
+    double offset[6];             /* estimated F/T offset ([A E6]), else 0 */
+    double mass, com[3], inertia_com[6];
+    double condition_number;
+    double sigma_min;
+    int physically_consistent;
+    int valid;                    /* 0: no estimate yet (error says why) */
+    int error;                    /* the core's code when !valid */
+} loadid_pipeline_estimate_t;
+
+/* Counters (status_t's and more). */
+typedef struct {
+    int state;
+    char reason[192];             /* why FAILED, else "" */
+    int64_t samples_ok;           /* complete usable JR3 samples */
+    int64_t samples_used;         /* fed to the estimators this run */
+    int64_t frames_bad;           /* unknown id, wrong DLC, malformed, bad log line */
+    int64_t samples_incomplete;
+    int64_t samples_saturated;
+    int64_t samples_faulty;
+    int64_t sequence_gaps;
+    int64_t joint_msgs_bad;
+    int64_t samples_stale;        /* no joint state close enough */
+    int64_t estimator_errors;     /* updates refused (non-finite input, full) */
+} loadid_pipeline_status_t;
+
+typedef struct {
+    void *ctx;
+    /* Every method's estimate: after each sample while ESTIMATING (every
+     * publish_every-th; may be NULL), and the final one at DONE. */
+    void (*estimate)(void *ctx, const loadid_pipeline_estimate_t *e);
+    /* The compensated wrench of each usable sample once DONE. */
+    void (*wrench)(void *ctx, int64_t utime, const double force[3], const double torque[3]);
+    /* A state change (reason: why FAILED, else ""). */
+    void (*state)(void *ctx, int64_t utime, int state, const char *reason);
+    /* Something worth a log line (a full-scale change, an ignored command). */
+    void (*log)(void *ctx, const char *msg);
+} loadid_pipeline_sink_t;
+
+typedef struct loadid_pipeline loadid_pipeline_t; /* opaque */
+
+/* publish_every: estimates during ESTIMATING go out after every n-th
+ * sample (1: every sample; 0: only the final one). Returns 0, or a
+ * negative code with a one-line reason in err. */
+int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *chain,
+                           const loadid_pipeline_sink_t *sink, int publish_every,
+                           loadid_pipeline_t **out, char *err, size_t errlen);
+
+void loadid_pipeline_destroy(loadid_pipeline_t *p);
+
+/* Inputs, in time order. */
+void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_joints,
+                                 const double *position, const double *setpoint);
+void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
+                             const char *load_name);
+void loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame);
+/* A can.log line or socket read that was not a frame. */
+void loadid_pipeline_bad_frame(loadid_pipeline_t *p);
+/* Time passes without input: ends zeroing and estimation windows. */
+void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us);
+/* The input ended (offline): an estimation under way ends as by STOP. */
+void loadid_pipeline_finish(loadid_pipeline_t *p, int64_t now_us);
+
+void loadid_pipeline_status(const loadid_pipeline_t *p, loadid_pipeline_status_t *st);
+
+/* The latest estimate of every configured method (in configuration order);
+ * returns how many (<= max). */
+int loadid_pipeline_estimates(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *out,
+                              int max);
+
+/* Whether START was ever seen since create or RESET. */
+int loadid_pipeline_started(const loadid_pipeline_t *p);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* LOADID_PIPELINE_H */

@@ -1,0 +1,193 @@
+/*
+ * loadidd: the load identification service (DESIGN.md "The command-line and
+ * configuration contract").
+ *
+ *   loadidd --config FILE --offline RECORDING_DIR [--result OUT.json]
+ *       runs the pipeline (pipeline.h) over a recording as fast as the
+ *       machine allows, with no sockets: can.log and lcm.log merged in time
+ *       order, commands acting at their utime; writes the final estimate of
+ *       every configured method as a JSON array (OUT.json, else stdout).
+ *       Exit 0, or non-zero with a one-line reason on stderr.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lcmtypes/loadid_command_t.h"
+#include "lcmtypes/loadid_joint_state_t.h"
+#include "loadid/config.h"
+#include "loadid/core.h"
+#include "loadid/pipeline.h"
+#include "loadid/recording.h"
+#include "loadid/urdf.h"
+#include "result_json.h"
+
+static const char *prog = "loadidd";
+
+static void usage(FILE *out) {
+    fprintf(out,
+            "usage: %s --config FILE --offline RECORDING_DIR [--result OUT.json] [--verbose]\n"
+            "Estimates the inertial parameters of the load on the robot's wrist sensor\n"
+            "(Kubus, Kroeger, Wahl 2008). --offline runs the pipeline over a recording\n"
+            "(can.log, lcm.log) and writes the final estimate of every configured method\n"
+            "as a JSON array to OUT.json (default stdout).\n",
+            prog);
+}
+
+static void warn(void *ctx, const char *msg) {
+    (void)ctx;
+    fprintf(stderr, "%s: warning: %s\n", prog, msg);
+}
+
+static int verbose;
+
+static void log_line(void *ctx, const char *msg) {
+    (void)ctx;
+    if (verbose) fprintf(stderr, "%s: %s\n", prog, msg);
+}
+
+static void state_line(void *ctx, int64_t utime, int state, const char *reason) {
+    (void)ctx;
+    static const char *names[] = {"IDLE", "ZEROING", "ESTIMATING", "DONE", "FAILED"};
+    if (verbose || state == LOADID_STATE_FAILED)
+        fprintf(stderr, "%s: %lld: %s%s%s\n", prog, (long long)utime, names[state],
+                *reason ? ": " : "", reason);
+}
+
+/* Feeds one recording event to the pipeline; returns the event's time. */
+static void feed(loadid_pipeline_t *p, const loadid_rec_event_t *ev) {
+    switch (ev->kind) {
+        case LOADID_REC_CAN: loadid_pipeline_can_frame(p, &ev->can); return;
+        case LOADID_REC_BAD_LINE: loadid_pipeline_bad_frame(p); return;
+        case LOADID_REC_LCM: break;
+    }
+    if (strcmp(ev->channel, "LOADID_JOINTS") == 0) {
+        loadid_joint_state_t m;
+        if (loadid_joint_state_t_decode(ev->data, 0, ev->datalen, &m) < 0) {
+            loadid_pipeline_joint_state(p, ev->t_us, -1, NULL, NULL); /* counted bad */
+            return;
+        }
+        loadid_pipeline_joint_state(p, m.utime, m.num_joints, m.position, m.setpoint);
+        loadid_joint_state_t_decode_cleanup(&m);
+    } else if (strcmp(ev->channel, "LOADID_COMMAND") == 0) {
+        loadid_command_t m;
+        if (loadid_command_t_decode(ev->data, 0, ev->datalen, &m) < 0) return;
+        /* Commands act when their utime is reached: the log's order. */
+        loadid_pipeline_command(p, ev->t_us, m.action, m.load_name);
+        loadid_command_t_decode_cleanup(&m);
+    }
+}
+
+static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, const char *dir,
+                       const char *result_path) {
+    char err[4400];
+    loadid_pipeline_sink_t sink = {.log = log_line, .state = state_line};
+    loadid_pipeline_t *p = NULL;
+    if (loadid_pipeline_create(cfg, chain, &sink, 0, &p, err, sizeof err) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, err);
+        return 1;
+    }
+    loadid_recording_reader_t *rec = NULL;
+    if (loadid_recording_reader_open(dir, &rec, err, sizeof err) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, err);
+        loadid_pipeline_destroy(p);
+        return 1;
+    }
+    loadid_rec_event_t ev;
+    int rc;
+    int64_t last = INT64_MIN;
+    while ((rc = loadid_recording_reader_next(rec, &ev)) == 1) {
+        feed(p, &ev);
+        if (ev.kind != LOADID_REC_BAD_LINE && ev.t_us > last) last = ev.t_us;
+    }
+    const int truncated = loadid_recording_lcm_truncated(rec);
+    loadid_recording_reader_close(rec);
+    if (rc < 0) {
+        fprintf(stderr, "%s: %s/can.log: read error\n", prog, dir);
+        loadid_pipeline_destroy(p);
+        return 1;
+    }
+    if (truncated) fprintf(stderr, "%s: warning: %s/lcm.log ends in a damaged event\n", prog, dir);
+    loadid_pipeline_finish(p, last);
+    loadid_pipeline_status_t st;
+    loadid_pipeline_status(p, &st);
+    if (verbose)
+        fprintf(stderr,
+                "%s: samples ok %lld, used %lld, frames bad %lld, incomplete %lld, saturated %lld, "
+                "faulty %lld, gaps %lld, joint msgs bad %lld, stale %lld\n",
+                prog, (long long)st.samples_ok, (long long)st.samples_used,
+                (long long)st.frames_bad, (long long)st.samples_incomplete,
+                (long long)st.samples_saturated, (long long)st.samples_faulty,
+                (long long)st.sequence_gaps, (long long)st.joint_msgs_bad,
+                (long long)st.samples_stale);
+    int status = 0;
+    if (!loadid_pipeline_started(p)) {
+        fprintf(stderr, "%s: %s: no START command in lcm.log: nothing was estimated\n", prog, dir);
+        status = 1;
+    } else if (st.state == LOADID_STATE_FAILED) {
+        fprintf(stderr, "%s: %s: estimation failed: %s\n", prog, dir, st.reason);
+        status = 1;
+    } else {
+        loadid_pipeline_estimate_t est[LOADID_MAX_METHODS];
+        const int n = loadid_pipeline_estimates(p, est, LOADID_MAX_METHODS);
+        FILE *out = result_path ? fopen(result_path, "w") : stdout;
+        if (!out || loadid_result_json_write(out, est, n) != 0 || (result_path && fclose(out) != 0)) {
+            fprintf(stderr, "%s: cannot write %s: %s\n", prog, result_path ? result_path : "stdout",
+                    strerror(errno));
+            status = 1;
+        }
+    }
+    loadid_pipeline_destroy(p);
+    return status;
+}
+
+int main(int argc, char **argv) {
+    const char *config_path = NULL, *offline = NULL, *result = NULL;
+    static const struct option opts[] = {
+        {"config", required_argument, NULL, 'c'}, {"offline", required_argument, NULL, 'o'},
+        {"result", required_argument, NULL, 'r'}, {"verbose", no_argument, NULL, 'v'},
+        {"help", no_argument, NULL, 'h'},         {NULL, 0, NULL, 0}};
+    int c;
+    while ((c = getopt_long(argc, argv, "c:o:r:vh", opts, NULL)) != -1) {
+        switch (c) {
+            case 'c': config_path = optarg; break;
+            case 'o': offline = optarg; break;
+            case 'r': result = optarg; break;
+            case 'v': verbose = 1; break;
+            case 'h': usage(stdout); return 0;
+            default: usage(stderr); return 2;
+        }
+    }
+    if (optind != argc || !config_path) {
+        fprintf(stderr, "%s: --config FILE is required\n", prog);
+        usage(stderr);
+        return 2;
+    }
+    if (result && !offline) {
+        fprintf(stderr, "%s: --result needs --offline\n", prog);
+        return 2;
+    }
+    static loadid_config_t cfg;
+    char err[1024];
+    loadid_config_default(&cfg);
+    if (loadid_config_load(config_path, &cfg, err, sizeof err, warn, NULL) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, err);
+        return 1;
+    }
+    loadid_chain_t chain;
+    if (loadid_urdf_load_file(cfg.robot_urdf, cfg.robot_base_link, cfg.robot_sensor_link, &chain,
+                              err, sizeof err) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, err);
+        return 1;
+    }
+    if (!offline) {
+        fprintf(stderr, "%s: live mode (SocketCAN and LCM) is not built yet: use --offline\n", prog);
+        return 1;
+    }
+    return run_offline(&cfg, &chain, offline, result);
+}

@@ -1,0 +1,407 @@
+/* The estimation pipeline of loadidd (pipeline.h). */
+#include "loadid/pipeline.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "loadid/core.h"
+#include "loadid/jr3.h"
+
+#define MIN_ZEROING_SAMPLES 10
+
+struct loadid_pipeline {
+    loadid_config_t cfg;
+    loadid_pipeline_sink_t sink;
+    int publish_every;
+    int n_params;                 /* 10 (zeroing) or 16 ([A E6]) */
+    int num_methods;
+    int has_riv;                  /* RIV configured: instruments needed */
+    loadid_est_t *est[LOADID_MAX_METHODS];
+    loadid_signals_t *sig;
+    loadid_jr3_decoder_t *jr3;
+    loadid_real_t distal[10];
+
+    int state;
+    char reason[192];
+    char load_name[LOADID_LOAD_NAME_MAX];
+    int started;
+    /* zeroing */
+    int64_t zero_end_us;
+    int64_t zero_n, zero_g_n;
+    double zero_sum[6], zero_g_sum[3];
+    int zeroed;                   /* y0 and g_init are valid */
+    loadid_real_t y0[6], g_init[3];
+    /* estimation */
+    int64_t est_end_us, last_sample_us, since_publish;
+    loadid_pipeline_estimate_t latest[LOADID_MAX_METHODS];
+    int primary;                  /* method used for wrench_t, -1 none */
+    loadid_real_t phi_total[16];  /* primary's estimate with the distal part */
+
+    int64_t frames_bad_extra, samples_used, estimator_errors;
+};
+
+static void note(loadid_pipeline_t *p, const char *fmt, ...) {
+    if (!p->sink.log) return;
+    char msg[256];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    p->sink.log(p->sink.ctx, msg);
+}
+
+static void set_state(loadid_pipeline_t *p, int64_t utime, int state, const char *reason) {
+    p->state = state;
+    snprintf(p->reason, sizeof p->reason, "%s", reason ? reason : "");
+    if (p->sink.state) p->sink.state(p->sink.ctx, utime, state, p->reason);
+}
+
+int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *chain,
+                           const loadid_pipeline_sink_t *sink, int publish_every,
+                           loadid_pipeline_t **out, char *err, size_t errlen) {
+    loadid_pipeline_t *p = calloc(1, sizeof *p);
+    if (!p) return -ENOMEM;
+    p->cfg = *cfg;
+    if (sink) p->sink = *sink;
+    p->publish_every = publish_every < 0 ? 0 : publish_every;
+    p->n_params = cfg->offset_model_estimate ? LOADID_NPHI_OFFSET : LOADID_NPHI;
+    p->primary = -1;
+    for (int i = 0; i < 10; ++i) p->distal[i] = (loadid_real_t)cfg->distal_phi[i];
+
+    loadid_signals_config_t scfg;
+    loadid_signals_config_default(&scfg);
+    scfg.source = (loadid_signal_source_t)cfg->signals;
+    scfg.measured.jerk_psd = scfg.setpoint.jerk_psd = (loadid_real_t)cfg->kalman_jerk_psd;
+    scfg.measured.meas_sigma = scfg.setpoint.meas_sigma = (loadid_real_t)cfg->kalman_meas_sigma;
+    scfg.max_joint_age_us = (int64_t)llround(cfg->kalman_max_joint_age_s * 1e6);
+    int rc = loadid_signals_create(chain, cfg->robot_gravity, &scfg, &p->sig);
+    const char *what = "the joint filters and kinematics";
+    if (rc == 0) {
+        loadid_jr3_config_t j = {.base_id = cfg->can_base_id};
+        memcpy(j.full_scale[LOADID_JR3_FORCE], cfg->jr3_fs_force, sizeof cfg->jr3_fs_force);
+        memcpy(j.full_scale[LOADID_JR3_MOMENT], cfg->jr3_fs_moment, sizeof cfg->jr3_fs_moment);
+        memcpy(j.full_scale[LOADID_JR3_LINEAR], cfg->jr3_fs_linear, sizeof cfg->jr3_fs_linear);
+        memcpy(j.full_scale[LOADID_JR3_ANGULAR], cfg->jr3_fs_angular, sizeof cfg->jr3_fs_angular);
+        rc = loadid_jr3_decoder_create(&j, &p->jr3);
+        what = "the JR3 decoder";
+    }
+    /* The weights follow where a - g and alpha come from (paper Fig. 9): the
+     * JR3's noise (noise.*) or the noise of what the joint filters derive
+     * (kalman.*). Weights that assume the JR3's noise for the filter's far
+     * smaller alpha error cost RTLS 7 % of the mass on a simulated o1. */
+    const int src = cfg->signals;
+    const double sigma_spec = src == LOADID_SIGNALS_SENSOR || src == LOADID_SIGNALS_MIXED
+                                  ? cfg->noise_linear
+                                  : cfg->kalman_spec_sigma;
+    const double sigma_alpha = src == LOADID_SIGNALS_SENSOR ? cfg->noise_angular
+                                                            : cfg->kalman_alpha_sigma;
+    p->num_methods = cfg->num_methods;
+    for (int m = 0; m < p->num_methods && rc == 0; ++m) {
+        loadid_est_config_t e;
+        rc = loadid_est_config_default((loadid_method_t)cfg->methods[m], p->n_params, &e);
+        if (rc == 0)
+            rc = loadid_est_weights_from_noise(&e, cfg->noise_force, cfg->noise_torque, sigma_spec,
+                                               sigma_alpha, cfg->noise_omega, cfg->omega_typical);
+        /* Batch references hold the whole window at up to 2 kHz. */
+        e.batch_capacity = (int)ceil(cfg->duration_s * 2000) + 100;
+        if (rc == 0) rc = loadid_est_create(&e, &p->est[m]);
+        what = "an estimator";
+    }
+    if (rc != 0) {
+        snprintf(err, errlen, "cannot create %s: %s", what, loadid_strerror(rc));
+        loadid_pipeline_destroy(p);
+        return rc;
+    }
+    for (int m = 0; m < p->num_methods; ++m) {
+        p->latest[m].method = cfg->methods[m];
+        p->has_riv |= cfg->methods[m] == LOADID_METHOD_RIV;
+    }
+    *out = p;
+    return 0;
+}
+
+void loadid_pipeline_destroy(loadid_pipeline_t *p) {
+    if (!p) return;
+    for (int m = 0; m < LOADID_MAX_METHODS; ++m) loadid_est_destroy(p->est[m]);
+    loadid_signals_destroy(p->sig);
+    loadid_jr3_decoder_destroy(p->jr3);
+    free(p);
+}
+
+/* ------------------------------------------------------------ estimates */
+
+/* Fills e with method m's current estimate (load only) and returns it. */
+static void estimate_of(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t *e) {
+    loadid_real_t phi[16] = {0};
+    loadid_est_info_t info;
+    memset(&info, 0, sizeof info);
+    const int rc = loadid_est_estimate(p->est[m], phi, &info);
+    memset(e, 0, sizeof *e);
+    e->utime = p->last_sample_us;
+    e->samples = info.samples;
+    e->method = p->cfg.methods[m];
+    e->state = p->state;
+    snprintf(e->load_name, sizeof e->load_name, "%s", p->load_name);
+    e->condition_number = (double)info.condition_number;
+    e->sigma_min = (double)info.sigma_min;
+    e->valid = rc == 0;
+    e->error = rc;
+    if (!e->valid) return;
+    loadid_real_t load[10];
+    loadid_phi_subtract(phi, p->distal, load);
+    loadid_physical_t ph;
+    loadid_phi_to_physical(load, &ph);
+    for (int i = 0; i < 10; ++i) e->phi[i] = (double)load[i];
+    if (p->n_params == LOADID_NPHI_OFFSET)
+        for (int i = 0; i < 6; ++i) e->offset[i] = (double)phi[10 + i];
+    e->mass = (double)ph.mass;
+    for (int i = 0; i < 3; ++i) e->com[i] = (double)ph.com[i];
+    for (int i = 0; i < 6; ++i) e->inertia_com[i] = (double)ph.inertia_com[i];
+    e->physically_consistent = ph.violations == 0;
+}
+
+static void publish_all(loadid_pipeline_t *p) {
+    for (int m = 0; m < p->num_methods; ++m) {
+        estimate_of(p, m, &p->latest[m]);
+        if (p->sink.estimate) p->sink.estimate(p->sink.ctx, &p->latest[m]);
+    }
+}
+
+static void finish_estimation(loadid_pipeline_t *p, int64_t utime) {
+    set_state(p, utime, LOADID_STATE_DONE, "");
+    publish_all(p);
+    /* wrench_t uses the first configured method with an estimate. */
+    p->primary = -1;
+    for (int m = 0; m < p->num_methods && p->primary < 0; ++m) {
+        if (!p->latest[m].valid) continue;
+        p->primary = m;
+        loadid_est_estimate(p->est[m], p->phi_total, NULL);
+    }
+}
+
+/* ------------------------------------------------------------- zeroing */
+
+static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
+    if (p->zero_n < MIN_ZEROING_SAMPLES) {
+        char why[160];
+        snprintf(why, sizeof why, "zeroing: %lld usable samples in the window (at least %d needed)",
+                 (long long)p->zero_n, MIN_ZEROING_SAMPLES);
+        set_state(p, utime, LOADID_STATE_FAILED, why);
+        return;
+    }
+    if (p->zero_g_n == 0) {
+        set_state(p, utime, LOADID_STATE_FAILED,
+                  "zeroing: no joint state near the samples (g_init needs the kinematics)");
+        return;
+    }
+    for (int i = 0; i < 6; ++i) p->y0[i] = (loadid_real_t)(p->zero_sum[i] / (double)p->zero_n);
+    for (int i = 0; i < 3; ++i) p->g_init[i] = (loadid_real_t)(p->zero_g_sum[i] / (double)p->zero_g_n);
+    p->zeroed = 1;
+    set_state(p, utime, LOADID_STATE_IDLE, "");
+}
+
+/* Windows that end by time, before anything at utime is handled. */
+static void advance(loadid_pipeline_t *p, int64_t utime) {
+    if (p->state == LOADID_STATE_ZEROING && utime >= p->zero_end_us) finish_zeroing(p, utime);
+    if (p->state == LOADID_STATE_ESTIMATING && utime >= p->est_end_us) finish_estimation(p, utime);
+}
+
+void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us) { advance(p, now_us); }
+
+void loadid_pipeline_finish(loadid_pipeline_t *p, int64_t now_us) {
+    advance(p, now_us);
+    if (p->state == LOADID_STATE_ZEROING) finish_zeroing(p, now_us);
+    if (p->state == LOADID_STATE_ESTIMATING) finish_estimation(p, now_us);
+}
+
+/* ------------------------------------------------------------- inputs */
+
+void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_joints,
+                                 const double *position, const double *setpoint) {
+    advance(p, utime);
+    loadid_real_t pos[LOADID_MAX_JOINTS], set[LOADID_MAX_JOINTS];
+    if (num_joints < 1 || num_joints > LOADID_MAX_JOINTS || !position) {
+        loadid_signals_push_joints(p->sig, utime, -1, NULL, NULL); /* counted there */
+        return;
+    }
+    for (int i = 0; i < num_joints; ++i) {
+        pos[i] = (loadid_real_t)position[i];
+        if (setpoint) set[i] = (loadid_real_t)setpoint[i];
+    }
+    loadid_signals_push_joints(p->sig, utime, num_joints, pos, setpoint ? set : NULL);
+}
+
+static void reset_run(loadid_pipeline_t *p) {
+    for (int m = 0; m < p->num_methods; ++m) loadid_est_reset(p->est[m]);
+    p->samples_used = 0;
+    p->since_publish = 0;
+    p->primary = -1;
+}
+
+void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
+                             const char *load_name) {
+    advance(p, utime);
+    switch (action) {
+        case LOADID_CMD_ZERO:
+            if (p->state == LOADID_STATE_ESTIMATING) {
+                note(p, "ZERO ignored while estimating");
+                return;
+            }
+            p->zero_n = p->zero_g_n = 0;
+            memset(p->zero_sum, 0, sizeof p->zero_sum);
+            memset(p->zero_g_sum, 0, sizeof p->zero_g_sum);
+            p->zeroed = 0;
+            p->zero_end_us = utime + (int64_t)llround(p->cfg.zeroing_window_s * 1e6);
+            set_state(p, utime, LOADID_STATE_ZEROING, "");
+            return;
+        case LOADID_CMD_START:
+            if (p->state == LOADID_STATE_ESTIMATING) {
+                note(p, "START ignored: already estimating");
+                return;
+            }
+            if (p->state == LOADID_STATE_ZEROING) finish_zeroing(p, utime);
+            if (p->state == LOADID_STATE_FAILED) return;
+            if (p->n_params == LOADID_NPHI && !p->zeroed) {
+                set_state(p, utime, LOADID_STATE_FAILED,
+                          "START before a completed ZERO (estimation.offset_model is zeroing)");
+                return;
+            }
+            reset_run(p);
+            snprintf(p->load_name, sizeof p->load_name, "%s", load_name ? load_name : "");
+            p->started = 1;
+            p->est_end_us = utime + (int64_t)llround(p->cfg.duration_s * 1e6);
+            set_state(p, utime, LOADID_STATE_ESTIMATING, "");
+            return;
+        case LOADID_CMD_STOP:
+            if (p->state == LOADID_STATE_ESTIMATING) finish_estimation(p, utime);
+            else note(p, "STOP ignored: not estimating");
+            return;
+        case LOADID_CMD_RESET:
+            reset_run(p);
+            p->zeroed = 0;
+            p->started = 0;
+            p->load_name[0] = 0;
+            for (int m = 0; m < p->num_methods; ++m) {
+                memset(&p->latest[m], 0, sizeof p->latest[m]);
+                p->latest[m].method = p->cfg.methods[m];
+            }
+            set_state(p, utime, LOADID_STATE_IDLE, "");
+            return;
+        default: note(p, "unknown command action %d ignored", action); return;
+    }
+}
+
+/* The regressor the estimators use for one motion: eq. (6) with the zeroing
+ * term of eqs. (7)-(9), or [A E6]. */
+static int data_matrix(const loadid_pipeline_t *p, const loadid_regressor_input_t *in,
+                       loadid_real_t A[6 * 16]) {
+    loadid_real_t A10[60];
+    int rc = loadid_regressor(in->spec, in->omega, in->alpha, A10);
+    if (rc != 0) return rc;
+    if (p->n_params == LOADID_NPHI_OFFSET) return loadid_regressor_with_offset(A10, A);
+    rc = loadid_regressor_add_zeroing(p->g_init, A10);
+    memcpy(A, A10, sizeof A10);
+    return rc;
+}
+
+static void on_sample(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
+    loadid_real_t y[6], lin[3], ang[3];
+    for (int i = 0; i < 3; ++i) {
+        y[i] = (loadid_real_t)s->value[LOADID_JR3_FORCE][i];
+        y[3 + i] = (loadid_real_t)s->value[LOADID_JR3_MOMENT][i];
+        lin[i] = (loadid_real_t)s->value[LOADID_JR3_LINEAR][i];
+        ang[i] = (loadid_real_t)s->value[LOADID_JR3_ANGULAR][i];
+    }
+    if (p->state == LOADID_STATE_ZEROING) {
+        for (int i = 0; i < 6; ++i) p->zero_sum[i] += (double)y[i];
+        p->zero_n++;
+        loadid_kin_state_t k;
+        if (loadid_signals_kinematics_at(p->sig, s->t_us, &k) == 0) {
+            for (int i = 0; i < 3; ++i) p->zero_g_sum[i] += (double)k.gravity[i];
+            p->zero_g_n++;
+        }
+        return;
+    }
+    if (p->state != LOADID_STATE_ESTIMATING && !(p->state == LOADID_STATE_DONE && p->primary >= 0))
+        return;
+    loadid_regressor_input_t motion, instr;
+    const int riv = p->has_riv && p->state == LOADID_STATE_ESTIMATING;
+    if (loadid_signals_at(p->sig, s->t_us, lin, ang, NULL, &motion, riv ? &instr : NULL) != 0)
+        return; /* counted by the signals (stale, no data) */
+    loadid_real_t A[6 * 16], C[6 * 16];
+    if (data_matrix(p, &motion, A) != 0) return;
+    if (p->n_params == LOADID_NPHI)
+        for (int i = 0; i < 6; ++i) y[i] -= p->y0[i]; /* eq. (7): the zeroed wrench */
+    if (p->state == LOADID_STATE_DONE) {
+        /* wrench_t: measured minus what the estimate predicts. */
+        loadid_real_t pred[6];
+        loadid_regressor_apply(A, p->n_params, p->phi_total, pred);
+        double f[3], t[3];
+        for (int i = 0; i < 3; ++i) f[i] = (double)(y[i] - pred[i]), t[i] = (double)(y[3 + i] - pred[3 + i]);
+        if (p->sink.wrench) p->sink.wrench(p->sink.ctx, s->t_us, f, t);
+        return;
+    }
+    const int have_c = riv && data_matrix(p, &instr, C) == 0;
+    for (int m = 0; m < p->num_methods; ++m) {
+        const int is_riv = p->cfg.methods[m] == LOADID_METHOD_RIV;
+        if (is_riv && !have_c) continue;
+        if (loadid_est_update(p->est[m], A, is_riv ? C : NULL, y) != 0) p->estimator_errors++;
+    }
+    p->samples_used++;
+    p->last_sample_us = s->t_us;
+    if (p->publish_every > 0 && ++p->since_publish >= p->publish_every) {
+        p->since_publish = 0;
+        publish_all(p);
+    }
+}
+
+void loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame) {
+    advance(p, frame->t_us);
+    loadid_jr3_output_t out;
+    const int rc = loadid_jr3_decoder_feed(p->jr3, frame, &out);
+    if (rc == LOADID_JR3_SAMPLE) {
+        /* A sample's time is its base+0 frame's: windows end by it too. */
+        advance(p, out.sample.t_us);
+        on_sample(p, &out.sample);
+    } else if (rc == LOADID_JR3_FULL_SCALE) {
+        const loadid_jr3_full_scale_change_t *c = &out.full_scale;
+        note(p, "JR3 %s full scale now %g %g %g (was %g %g %g)", loadid_jr3_group_name(c->group),
+             c->current[0], c->current[1], c->current[2], c->previous[0], c->previous[1],
+             c->previous[2]);
+    }
+}
+
+void loadid_pipeline_bad_frame(loadid_pipeline_t *p) { p->frames_bad_extra++; }
+
+void loadid_pipeline_status(const loadid_pipeline_t *p, loadid_pipeline_status_t *st) {
+    memset(st, 0, sizeof *st);
+    st->state = p->state;
+    snprintf(st->reason, sizeof st->reason, "%s", p->reason);
+    loadid_jr3_stats_t j;
+    loadid_jr3_decoder_stats(p->jr3, &j);
+    loadid_signals_stats_t s;
+    loadid_signals_stats(p->sig, &s);
+    st->samples_ok = j.samples_ok;
+    st->samples_used = p->samples_used;
+    st->frames_bad = j.frames_bad + p->frames_bad_extra;
+    st->samples_incomplete = j.samples_incomplete;
+    st->samples_saturated = j.samples_saturated;
+    st->samples_faulty = j.samples_faulty;
+    st->sequence_gaps = j.sequence_gaps;
+    st->joint_msgs_bad = s.joint_msgs_bad;
+    st->samples_stale = s.samples_stale + s.samples_no_joints;
+    st->estimator_errors = p->estimator_errors;
+}
+
+int loadid_pipeline_estimates(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *out,
+                              int max) {
+    int n = p->num_methods < max ? p->num_methods : max;
+    for (int m = 0; m < n; ++m) out[m] = p->latest[m];
+    return n;
+}
+
+int loadid_pipeline_started(const loadid_pipeline_t *p) { return p->started; }

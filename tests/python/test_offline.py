@@ -1,0 +1,183 @@
+"""loadidd --offline (DESIGN.md): the pipeline over simulated recordings.
+
+The truth is what loadid-sim put in (truth.yaml: the load's phi, offsets);
+the usable samples of a damaged recording are counted independently with
+the project's decoder (tests/tools/jr3_decode_log) over the estimation
+window that truth.yaml gives.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from recordings import damage_count, program, read_truth, run_tool, simulate
+
+KEYS = ["method", "load_name", "samples", "phi", "offset", "mass", "com", "inertia_com",
+        "condition_number", "physically_consistent"]
+O1 = np.array([1.00, -43.5e-3, 28.5e-3, 22.5e-3, 2.21e-3, 1.22e-3, 0.96e-3, 3.74e-3,
+               -0.63e-3, 4.95e-3])
+
+
+def write_config(path, text="estimation:\n  duration_s: 1.5\n"):
+    path.write_text(text)
+    return path
+
+
+def offline(config, rec, *extra, check=True):
+    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(config), "--offline", str(rec),
+                        *[str(e) for e in extra]], capture_output=True, text=True, timeout=300)
+    if check:
+        assert r.returncode == 0, r.stderr
+        return (json.loads(r.stdout) if r.stdout else None), r.stderr
+    return r
+
+
+def truth_phi(rec):
+    truth = read_truth(rec)
+    return np.array(json.loads(truth["load.phi"])), truth
+
+
+def physical(phi):
+    """Mass, COM and inertia about the COM, computed here (parallel axes)."""
+    m, c = phi[0], phi[1:4] / phi[0]
+    I = np.array([[phi[4], phi[5], phi[6]], [phi[5], phi[7], phi[8]], [phi[6], phi[8], phi[9]]])
+    Ic = I - m * (c @ c * np.eye(3) - np.outer(c, c))
+    return m, c, Ic[np.triu_indices(3)]
+
+
+def assert_close_to_truth(est, phi, mass_rel=0.03, com_abs=2e-3, inertia_abs=3e-4):
+    m, c, ic = physical(phi)
+    assert abs(est["mass"] - m) <= mass_rel * m, (est["mass"], m)
+    assert np.max(np.abs(np.array(est["com"]) - c)) <= com_abs, (est["com"], c)
+    assert np.max(np.abs(np.array(est["inertia_com"]) - ic)) <= inertia_abs, (est["inertia_com"], ic)
+    # The reported physical values are those of the reported phi.
+    em, ec, eic = physical(np.array(est["phi"]))
+    assert abs(em - est["mass"]) <= 1e-12 and np.allclose(ec, est["com"], atol=1e-12)
+    assert np.allclose(eic, est["inertia_com"], atol=1e-12)
+
+
+def test_result_has_the_contract_shape_and_rtls_finds_o1(recording, tmp_path):
+    cfg = write_config(tmp_path / "c.yaml")  # the defaults
+    result, _ = offline(cfg, recording)
+    assert [r["method"] for r in result] == ["RTLS", "RIV", "RLS"]  # estimation.methods
+    for r in result:
+        assert list(r) == KEYS
+        assert r["load_name"] == "o1" and r["samples"] == 1500
+        assert len(r["phi"]) == 10 and len(r["offset"]) == 6 and r["offset"] == [0.0] * 6
+        assert len(r["com"]) == 3 and len(r["inertia_com"]) == 6
+        assert r["condition_number"] > 1
+    phi, _ = truth_phi(recording)
+    np.testing.assert_array_equal(phi, O1)
+    assert_close_to_truth(result[0], phi)
+    assert_close_to_truth(result[1], phi)
+    # The same result into a file.
+    out = tmp_path / "out.json"
+    nothing, _ = offline(cfg, recording, "--result", out)
+    assert nothing is None and json.loads(out.read_text()) == result
+
+
+@pytest.mark.parametrize("signals", ["sensor", "kf", "setpoint", "mixed"])
+def test_every_signal_source_estimates(recording, tmp_path, signals):
+    cfg = write_config(tmp_path / "c.yaml", f"estimation:\n  signals: {signals}\n"
+                                            "  methods: [RTLS, TLS_BATCH]\n")
+    result, _ = offline(cfg, recording)
+    phi, _ = truth_phi(recording)
+    # RTLS is the batch TLS of the same rows, recursively.
+    np.testing.assert_allclose(result[0]["phi"], result[1]["phi"], rtol=1e-6, atol=1e-9)
+    assert_close_to_truth(result[0], phi, mass_rel=0.05, com_abs=4e-3, inertia_abs=1e-3)
+
+
+def test_distal_part_is_subtracted(trajectory, tmp_path):
+    distal = [0.3, 0.0, 0.0, 0.006, 2e-4, 0.0, 0.0, 2e-4, 0.0, 1e-4]
+    cfg = write_config(tmp_path / "c.yaml", f"distal:\n  phi: {distal}\n")
+    rec = simulate(tmp_path / "rec", trajectory, "--config", cfg)
+    result, _ = offline(cfg, rec)
+    phi, _ = truth_phi(rec)
+    assert_close_to_truth(result[0], phi)
+
+
+def test_offset_model_estimates_the_offset(trajectory, tmp_path):
+    cfg = write_config(tmp_path / "c.yaml", "estimation:\n  offset_model: estimate\n")
+    rec = simulate(tmp_path / "rec", trajectory)
+    result, _ = offline(cfg, rec)
+    phi, truth = truth_phi(rec)
+    offset = np.array(json.loads(truth["offset"]))
+    rtls = result[0]
+    assert_close_to_truth(rtls, phi, mass_rel=0.05, com_abs=4e-3, inertia_abs=1e-3)
+    np.testing.assert_allclose(rtls["offset"][:3], offset[:3], atol=0.3)
+    np.testing.assert_allclose(rtls["offset"][3:], offset[3:], atol=0.03)
+
+
+def usable_samples_in_window(rec):
+    """Complete, unsaturated, fault-free samples with START <= t < START +
+    1.5 s, by the project's decoder."""
+    truth = read_truth(rec)
+    start = int(truth["times.start"])
+    out = run_tool([program("LOADID_JR3_DECODE_LOG"), rec / "can.log"]).stdout
+    n = 0
+    for line in out.splitlines():
+        f = line.split()
+        if f[0] == "S" and int(f[1]) == 1 and start <= int(f[2]) < start + 1_500_000:
+            n += 1
+    return n
+
+
+@pytest.mark.parametrize("damage", ["saturate=0.02", "fault=0.02", "skip-samples=0.02",
+                                    "drop-frames=0.01", "bad-frames=0.02", "bit-errors=0.01"])
+def test_damaged_samples_never_reach_the_estimators(trajectory, tmp_path, damage):
+    rec = simulate(tmp_path / "rec", trajectory, "--damage", damage)
+    cfg = write_config(tmp_path / "c.yaml")
+    result, err = offline(cfg, rec, "--verbose")
+    kind = damage.split("=")[0]
+    truth = read_truth(rec)
+    assert damage_count(truth, kind) > 0
+    expected = usable_samples_in_window(rec)
+    assert expected < 1500 or kind in ("bad-frames",)
+    assert all(r["samples"] == expected for r in result), (expected, [r["samples"] for r in result])
+    if kind != "bit-errors":  # a flipped bit in a count is a wrong value nobody can see
+        phi, _ = truth_phi(rec)
+        assert_close_to_truth(result[0], phi, mass_rel=0.05, com_abs=4e-3, inertia_abs=1e-3)
+    # The summary counts each fault as the damage was done.
+    summary = next(l for l in err.splitlines() if "samples ok" in l)
+    counts = {k.strip(): int(v) for k, v in re.findall(r"([a-z][a-z ]*?) (\d+)", summary)}
+    done = damage_count(truth, kind)
+    want = {"saturate": ("saturated", done), "fault": ("faulty", done),
+            "bad-frames": ("frames bad", done), "skip-samples": ("gaps", done)}.get(kind)
+    if want:
+        assert counts[want[0]] in (want[1], want[1] - 1), (summary, want)  # -1: a last one unseen
+
+
+def test_stalled_joints_refuse_samples_and_count_them(trajectory, tmp_path):
+    rec = simulate(tmp_path / "rec", trajectory, "--damage", "stall-joints=1.5:1.6",
+                   "--damage", "nan-joints=0.01")
+    truth = read_truth(rec)
+    result, err = offline(write_config(tmp_path / "c.yaml"), rec, "--verbose")
+    # 100 ms without joint states: samples more than 5 ms from one are refused.
+    assert 1500 - 100 <= result[0]["samples"] <= 1500 - 90
+    nans = damage_count(truth, "nan-joints")
+    assert f"joint msgs bad {nans}," in err
+    assert "stale " in err and "stale 0" not in err
+
+
+def test_bad_input_gives_one_line_and_non_zero(recording, tmp_path):
+    cfg = write_config(tmp_path / "c.yaml")
+    r = offline(cfg, tmp_path / "nothing", check=False)
+    assert r.returncode != 0 and r.stdout == ""
+    reasons = [l for l in r.stderr.splitlines() if ": warning: " not in l]
+    assert len(reasons) == 1 and "cannot read" in reasons[0]
+    bad = write_config(tmp_path / "bad.yaml", "estimation:\n  methods: [RTLS, QR]\n")
+    r = offline(bad, recording, check=False)
+    assert r.returncode != 0 and "bad.yaml:2: estimation.methods[1]" in r.stderr
+    # A recording without START (an empty lcm.log).
+    no_start = tmp_path / "nostart"
+    no_start.mkdir()
+    shutil.copy(recording / "can.log", no_start / "can.log")
+    (no_start / "lcm.log").write_bytes(b"")
+    r = offline(cfg, no_start, check=False)
+    assert r.returncode != 0 and "no START" in r.stderr
