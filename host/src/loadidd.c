@@ -18,12 +18,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lcmtypes/loadid_command_t.h"
-#include "lcmtypes/loadid_joint_state_t.h"
 #include "loadid/config.h"
 #include "loadid/core.h"
+#include "loadid/offline.h"
 #include "loadid/pipeline.h"
-#include "loadid/recording.h"
 #include "loadid/urdf.h"
 #include "result_json.h"
 
@@ -59,30 +57,6 @@ static void state_line(void *ctx, int64_t utime, int state, const char *reason) 
                 *reason ? ": " : "", reason);
 }
 
-/* Feeds one recording event to the pipeline; returns the event's time. */
-static void feed(loadid_pipeline_t *p, const loadid_rec_event_t *ev) {
-    switch (ev->kind) {
-        case LOADID_REC_CAN: loadid_pipeline_can_frame(p, &ev->can); return;
-        case LOADID_REC_BAD_LINE: loadid_pipeline_bad_frame(p); return;
-        case LOADID_REC_LCM: break;
-    }
-    if (strcmp(ev->channel, "LOADID_JOINTS") == 0) {
-        loadid_joint_state_t m;
-        if (loadid_joint_state_t_decode(ev->data, 0, ev->datalen, &m) < 0) {
-            loadid_pipeline_joint_state(p, ev->t_us, -1, NULL, NULL); /* counted bad */
-            return;
-        }
-        loadid_pipeline_joint_state(p, m.utime, m.num_joints, m.position, m.setpoint);
-        loadid_joint_state_t_decode_cleanup(&m);
-    } else if (strcmp(ev->channel, "LOADID_COMMAND") == 0) {
-        loadid_command_t m;
-        if (loadid_command_t_decode(ev->data, 0, ev->datalen, &m) < 0) return;
-        /* Commands act when their utime is reached: the log's order. */
-        loadid_pipeline_command(p, ev->t_us, m.action, m.load_name);
-        loadid_command_t_decode_cleanup(&m);
-    }
-}
-
 static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, const char *dir,
                        const char *result_path) {
     char err[4400];
@@ -92,28 +66,13 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
         fprintf(stderr, "%s: %s\n", prog, err);
         return 1;
     }
-    loadid_recording_reader_t *rec = NULL;
-    if (loadid_recording_reader_open(dir, &rec, err, sizeof err) != 0) {
+    int truncated = 0;
+    if (loadid_offline_run(p, dir, &truncated, err, sizeof err) != 0) {
         fprintf(stderr, "%s: %s\n", prog, err);
         loadid_pipeline_destroy(p);
         return 1;
     }
-    loadid_rec_event_t ev;
-    int rc;
-    int64_t last = INT64_MIN;
-    while ((rc = loadid_recording_reader_next(rec, &ev)) == 1) {
-        feed(p, &ev);
-        if (ev.kind != LOADID_REC_BAD_LINE && ev.t_us > last) last = ev.t_us;
-    }
-    const int truncated = loadid_recording_lcm_truncated(rec);
-    loadid_recording_reader_close(rec);
-    if (rc < 0) {
-        fprintf(stderr, "%s: %s/can.log: read error\n", prog, dir);
-        loadid_pipeline_destroy(p);
-        return 1;
-    }
     if (truncated) fprintf(stderr, "%s: warning: %s/lcm.log ends in a damaged event\n", prog, dir);
-    loadid_pipeline_finish(p, last);
     loadid_pipeline_status_t st;
     loadid_pipeline_status(p, &st);
     if (verbose)

@@ -3,9 +3,10 @@
 # a trajectory, simulate a clean and a damaged recording (every kind of
 # damage at once), compute their condition numbers, and refuse bad input
 # with a message and a non-zero exit. Sanitizer findings fail the run.
-# Usage: tools_pipeline.sh TRAJ SIM KAPPA WORKDIR
+# And loadidd --offline over both recordings.
+# Usage: tools_pipeline.sh TRAJ SIM KAPPA LOADIDD WORKDIR
 set -eu
-traj=$1 sim=$2 kappa=$3 work=$4
+traj=$1 sim=$2 kappa=$3 loadidd=$4 work=$5
 rm -rf "$work" && mkdir -p "$work"
 
 "$traj" --monte-carlo 40 --candidates 1 --max-evals 80 --quiet --out "$work/traj.yaml" \
@@ -21,6 +22,12 @@ for f in can.log lcm.log truth.yaml; do
 done
 "$kappa" "$work/clean" "$work/damaged" > "$work/kappa.txt"
 test "$(wc -l < "$work/kappa.txt")" -eq 3
+
+printf 'estimation:\n  methods: [RTLS, RIV, RLS, LS_BATCH, TLS_BATCH]\n' > "$work/all.yaml"
+"$loadidd" --config "$work/all.yaml" --offline "$work/clean" --result "$work/clean.json"
+"$loadidd" --config "$work/all.yaml" --offline "$work/damaged" --verbose > "$work/damaged.json"
+test "$(grep -c '"method"' "$work/clean.json")" -eq 5
+test "$(grep -c '"method"' "$work/damaged.json")" -eq 5
 
 # Bad input: a clear one-line reason and exit status 1 or 2, never a crash.
 expect_refusal() {
@@ -46,4 +53,7 @@ grep -q "bad_config.yaml:1: robot" "$work/err.txt" || { cat "$work/err.txt" >&2;
 expect_refusal "$traj" --monte-carlo 0
 expect_refusal "$sim" --trajectory "$work/traj.yaml" --out "$work/x" --load-phi 1,2,3
 expect_refusal "$kappa" "$work/nothing"
+expect_refusal "$loadidd" --config "$work/all.yaml" --offline "$work/nothing"
+expect_refusal "$loadidd" --config "$work/bad_config.yaml" --offline "$work/clean"
+expect_refusal "$loadidd" --offline "$work/clean"
 echo "tools pipeline: ok"
