@@ -27,6 +27,8 @@ DEBIAN_PACKAGES=(
   liblcm-dev liblcm-bin libglib2.0-dev can-utils
   # the configuration (YAML, libyaml) and the trajectory designer's optimiser (NLopt)
   libyaml-dev libnlopt-dev
+  # the LCM test's private network namespace (ip; unshare is in util-linux)
+  iproute2
   # the Debian Python that makes build/venv (its packages come from PyPI)
   python3 python3-venv
   # HTTPS to PyPI for pip, and git for working in the clone

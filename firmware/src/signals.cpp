@@ -228,3 +228,7 @@ extern "C" int loadid_signals_stats(const loadid_signals_t *s, loadid_signals_st
     *stats = s->stats;
     return 0;
 }
+
+extern "C" int64_t loadid_signals_last_joint_time(const loadid_signals_t *s) {
+    return s ? loadid_jf_last_time(s->measured) : INT64_MIN;
+}

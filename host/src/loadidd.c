@@ -8,6 +8,12 @@
  *       order, commands acting at their utime; writes the final estimate of
  *       every configured method as a JSON array (OUT.json, else stdout).
  *       Exit 0, or non-zero with a one-line reason on stderr.
+ *   loadidd --config FILE [--can-file CAN.LOG] [--publish-every N]
+ *       the live service (live.c): joint states and commands from LCM, JR3
+ *       frames from SocketCAN (can.interface) or, with --can-file, from a
+ *       candump log replayed in real time; estimate_t (every N-th sample
+ *       while estimating, and the final one), wrench_t once DONE, status_t
+ *       at 1 Hz on LCM. SIGTERM or SIGINT stop it cleanly.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -23,6 +29,7 @@
 #include "loadid/offline.h"
 #include "loadid/pipeline.h"
 #include "loadid/urdf.h"
+#include "live.h"
 #include "result_json.h"
 
 static const char *prog = "loadidd";
@@ -30,11 +37,14 @@ static const char *prog = "loadidd";
 static void usage(FILE *out) {
     fprintf(out,
             "usage: %s --config FILE --offline RECORDING_DIR [--result OUT.json] [--verbose]\n"
+            "       %s --config FILE [--can-file CAN.LOG [--can-file-epoch US]]\n"
+            "                [--publish-every N] [--verbose]\n"
             "Estimates the inertial parameters of the load on the robot's wrist sensor\n"
             "(Kubus, Kroeger, Wahl 2008). --offline runs the pipeline over a recording\n"
             "(can.log, lcm.log) and writes the final estimate of every configured method\n"
-            "as a JSON array to OUT.json (default stdout).\n",
-            prog);
+            "as a JSON array to OUT.json (default stdout). Without --offline it runs live:\n"
+            "LCM in and out, JR3 frames from SocketCAN or a candump log (--can-file).\n",
+            prog, prog);
 }
 
 static void warn(void *ctx, const char *msg) {
@@ -106,10 +116,14 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
 }
 
 int main(int argc, char **argv) {
-    const char *config_path = NULL, *offline = NULL, *result = NULL;
+    const char *config_path = NULL, *offline = NULL, *result = NULL, *can_file = NULL;
+    int publish_every = 1;
+    long long epoch = 0;
     static const struct option opts[] = {
         {"config", required_argument, NULL, 'c'}, {"offline", required_argument, NULL, 'o'},
         {"result", required_argument, NULL, 'r'}, {"verbose", no_argument, NULL, 'v'},
+        {"can-file", required_argument, NULL, 'f'}, {"publish-every", required_argument, NULL, 'p'},
+        {"can-file-epoch", required_argument, NULL, 'e'},
         {"help", no_argument, NULL, 'h'},         {NULL, 0, NULL, 0}};
     int c;
     while ((c = getopt_long(argc, argv, "c:o:r:vh", opts, NULL)) != -1) {
@@ -118,6 +132,18 @@ int main(int argc, char **argv) {
             case 'o': offline = optarg; break;
             case 'r': result = optarg; break;
             case 'v': verbose = 1; break;
+            case 'f': can_file = optarg; break;
+            case 'e': epoch = strtoll(optarg, NULL, 10); break;
+            case 'p': {
+                char *end;
+                long v = strtol(optarg, &end, 10);
+                if (*end || end == optarg || v < 1 || v > 1000000) {
+                    fprintf(stderr, "%s: --publish-every: a count >= 1, not %s\n", prog, optarg);
+                    return 2;
+                }
+                publish_every = (int)v;
+                break;
+            }
             case 'h': usage(stdout); return 0;
             default: usage(stderr); return 2;
         }
@@ -145,8 +171,9 @@ int main(int argc, char **argv) {
         return 1;
     }
     if (!offline) {
-        fprintf(stderr, "%s: live mode (SocketCAN and LCM) is not built yet: use --offline\n", prog);
-        return 1;
+        loadid_live_options_t live = {.can_file = can_file, .can_file_epoch = epoch,
+                                      .publish_every = publish_every, .verbose = verbose};
+        return loadid_live_run(&cfg, &chain, &live);
     }
     return run_offline(&cfg, &chain, offline, result);
 }

@@ -12,6 +12,7 @@
 #include "loadid/jr3.h"
 
 #define MIN_ZEROING_SAMPLES 10
+#define PENDING_MAX 64 /* samples waiting for joint data: 64 ms at 1 kHz */
 
 struct loadid_pipeline {
     loadid_config_t cfg;
@@ -42,7 +43,15 @@ struct loadid_pipeline {
     loadid_real_t phi_total[16];  /* primary's estimate with the distal part */
 
     int64_t frames_bad_extra, samples_used, estimator_errors;
+    /* Samples wait here until a joint state at or after their time has
+     * arrived, so the joints are interpolated at the sample's time, not
+     * extrapolated, and the result does not depend on which of the two
+     * streams a process happened to read first (live equals offline). */
+    loadid_jr3_sample_t pending[PENDING_MAX];
+    int pending_head, pending_count;
 };
+
+static void flush_pending(loadid_pipeline_t *p, int64_t before, int ready);
 
 static void note(loadid_pipeline_t *p, const char *fmt, ...) {
     if (!p->sink.log) return;
@@ -210,9 +219,17 @@ static void advance(loadid_pipeline_t *p, int64_t utime) {
     if (p->state == LOADID_STATE_ESTIMATING && utime >= p->est_end_us) finish_estimation(p, utime);
 }
 
-void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us) { advance(p, now_us); }
+/* The clock ends a window only TICK_GRACE_US after its end, so that a
+ * window normally ends by its samples' own times (as offline) and by the
+ * clock only when samples stop coming. */
+#define TICK_GRACE_US 50000
+void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us) {
+    flush_pending(p, now_us - TICK_GRACE_US, 0); /* joints stopped: serve (or refuse) them */
+    advance(p, now_us - TICK_GRACE_US);
+}
 
 void loadid_pipeline_finish(loadid_pipeline_t *p, int64_t now_us) {
+    flush_pending(p, INT64_MAX, 0);
     advance(p, now_us);
     if (p->state == LOADID_STATE_ZEROING) finish_zeroing(p, now_us);
     if (p->state == LOADID_STATE_ESTIMATING) finish_estimation(p, now_us);
@@ -222,7 +239,6 @@ void loadid_pipeline_finish(loadid_pipeline_t *p, int64_t now_us) {
 
 void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_joints,
                                  const double *position, const double *setpoint) {
-    advance(p, utime);
     loadid_real_t pos[LOADID_MAX_JOINTS], set[LOADID_MAX_JOINTS];
     if (num_joints < 1 || num_joints > LOADID_MAX_JOINTS || !position) {
         loadid_signals_push_joints(p->sig, utime, -1, NULL, NULL); /* counted there */
@@ -232,7 +248,8 @@ void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_jo
         pos[i] = (loadid_real_t)position[i];
         if (setpoint) set[i] = (loadid_real_t)setpoint[i];
     }
-    loadid_signals_push_joints(p->sig, utime, num_joints, pos, setpoint ? set : NULL);
+    if (loadid_signals_push_joints(p->sig, utime, num_joints, pos, setpoint ? set : NULL) == 0)
+        flush_pending(p, INT64_MIN, 1);
 }
 
 static void reset_run(loadid_pipeline_t *p) {
@@ -244,6 +261,7 @@ static void reset_run(loadid_pipeline_t *p) {
 
 void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
                              const char *load_name) {
+    flush_pending(p, utime, 0); /* what came before the command goes first */
     advance(p, utime);
     switch (action) {
         case LOADID_CMD_ZERO:
@@ -359,14 +377,36 @@ static void on_sample(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
     }
 }
 
+/* Processes the oldest waiting sample: windows end by its time first. */
+static void pop_pending(loadid_pipeline_t *p) {
+    const loadid_jr3_sample_t *s = &p->pending[p->pending_head];
+    advance(p, s->t_us);
+    on_sample(p, s);
+    p->pending_head = (p->pending_head + 1) % PENDING_MAX;
+    p->pending_count--;
+}
+
+/* Processes waiting samples with a time before `before`, or (ready) those
+ * that joint data now covers. */
+static void flush_pending(loadid_pipeline_t *p, int64_t before, int ready) {
+    const int64_t joints = loadid_signals_last_joint_time(p->sig);
+    while (p->pending_count > 0) {
+        const int64_t t = p->pending[p->pending_head].t_us;
+        if (t < before || (ready && t <= joints))
+            pop_pending(p);
+        else
+            break;
+    }
+}
+
 void loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame) {
-    advance(p, frame->t_us);
     loadid_jr3_output_t out;
     const int rc = loadid_jr3_decoder_feed(p->jr3, frame, &out);
     if (rc == LOADID_JR3_SAMPLE) {
-        /* A sample's time is its base+0 frame's: windows end by it too. */
-        advance(p, out.sample.t_us);
-        on_sample(p, &out.sample);
+        if (p->pending_count == PENDING_MAX) pop_pending(p); /* joints this late: serve it now */
+        p->pending[(p->pending_head + p->pending_count) % PENDING_MAX] = out.sample;
+        p->pending_count++;
+        flush_pending(p, INT64_MIN, 1);
     } else if (rc == LOADID_JR3_FULL_SCALE) {
         const loadid_jr3_full_scale_change_t *c = &out.full_scale;
         note(p, "JR3 %s full scale now %g %g %g (was %g %g %g)", loadid_jr3_group_name(c->group),

@@ -202,7 +202,10 @@ static void stale_and_missing_joints_are_refused_and_counted(void **state) {
     memset(&m, 0x5a, sizeof m);
     memcpy(&untouched, &m, sizeof m);
     assert_int_equal(loadid_signals_at(s, 1000, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_NO_DATA);
+    assert_true(loadid_signals_last_joint_time(s) == INT64_MIN);
     push_range(s, 0, 11000); /* newest at 10 ms; max age 5 ms */
+    assert_true(loadid_signals_last_joint_time(s) == 10000);
+    assert_true(loadid_signals_last_joint_time(NULL) == INT64_MIN);
     assert_int_equal(loadid_signals_at(s, 15000, kJr3Spec, NULL, NULL, &m, NULL), 0);
     assert_int_equal(loadid_signals_at(s, 15001, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_STALE);
     memcpy(&untouched, &m, sizeof m);

@@ -121,6 +121,11 @@ int loadid_signals_kinematics_at(const loadid_signals_t *s, int64_t t_us,
 int loadid_signals_stats(const loadid_signals_t *s,
                          loadid_signals_stats_t *stats);
 
+/* Time of the newest accepted joint state [us]; INT64_MIN before the
+ * first (or for a NULL s). A sensor sample no later than this has joint
+ * data on both sides of it. */
+int64_t loadid_signals_last_joint_time(const loadid_signals_t *s);
+
 #ifdef __cplusplus
 }
 #endif

@@ -115,7 +115,9 @@ void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
 void loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame);
 /* A can.log line or socket read that was not a frame. */
 void loadid_pipeline_bad_frame(loadid_pipeline_t *p);
-/* Time passes without input: ends zeroing and estimation windows. */
+/* Time passes without input: ends zeroing and estimation windows that
+ * ended more than 50 ms before now_us (a window ends by its samples' times
+ * first; the clock only when samples stop). */
 void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us);
 /* The input ended (offline): an estimation under way ends as by STOP. */
 void loadid_pipeline_finish(loadid_pipeline_t *p, int64_t now_us);

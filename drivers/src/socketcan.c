@@ -1,0 +1,87 @@
+/* SocketCAN input (socketcan.h). */
+#define _DEFAULT_SOURCE
+#include "loadid/socketcan.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <linux/can.h>
+#include <linux/can/error.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
+
+int loadid_socketcan_open(const char *ifname, uint32_t base_id, char *err, size_t errlen) {
+    if (!ifname || strlen(ifname) >= IFNAMSIZ || base_id > 0x7FB) {
+        snprintf(err, errlen, "invalid CAN interface name or base id");
+        return -EINVAL;
+    }
+    int fd = socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
+    if (fd < 0) {
+        int e = errno;
+        snprintf(err, errlen, "%s: no CAN socket: %s", ifname, strerror(e));
+        return -e;
+    }
+    struct ifreq ifr;
+    memset(&ifr, 0, sizeof ifr);
+    memcpy(ifr.ifr_name, ifname, strlen(ifname));
+    struct sockaddr_can addr;
+    memset(&addr, 0, sizeof addr);
+    addr.can_family = AF_CAN;
+    /* The JR3's five identifiers only, standard frames; and error frames. */
+    struct can_filter filter[5];
+    for (int i = 0; i < 5; ++i) {
+        filter[i].can_id = base_id + (uint32_t)i;
+        filter[i].can_mask = CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG;
+    }
+    const can_err_mask_t err_mask = CAN_ERR_MASK;
+    const int one = 1;
+    const char *what = NULL;
+    if (ioctl(fd, SIOCGIFINDEX, &ifr) < 0) what = "no such interface";
+    else if ((addr.can_ifindex = ifr.ifr_ifindex),
+             setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filter, sizeof filter) < 0) what = "filter";
+    else if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) < 0) what = "error filter";
+    else if (setsockopt(fd, SOL_SOCKET, SO_TIMESTAMP, &one, sizeof one) < 0) what = "time stamps";
+    else if (bind(fd, (struct sockaddr *)&addr, sizeof addr) < 0) what = "bind";
+    if (what) {
+        int e = errno;
+        snprintf(err, errlen, "%s: %s: %s", ifname, what, strerror(e));
+        close(fd);
+        return -e;
+    }
+    return fd;
+}
+
+int loadid_socketcan_read(int fd, loadid_can_frame_t *frame) {
+    struct can_frame cf;
+    char control[CMSG_SPACE(sizeof(struct timeval))];
+    struct iovec iov = {.iov_base = &cf, .iov_len = sizeof cf};
+    struct msghdr msg = {.msg_iov = &iov, .msg_iovlen = 1, .msg_control = control,
+                         .msg_controllen = sizeof control};
+    ssize_t n = recvmsg(fd, &msg, 0);
+    if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR ? 0 : -errno;
+    if ((size_t)n < sizeof cf) return -EIO;
+    memset(frame, 0, sizeof *frame);
+    frame->t_us = -1;
+    for (struct cmsghdr *c = CMSG_FIRSTHDR(&msg); c; c = CMSG_NXTHDR(&msg, c)) {
+        if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMP) {
+            struct timeval tv;
+            memcpy(&tv, CMSG_DATA(c), sizeof tv);
+            frame->t_us = (int64_t)tv.tv_sec * 1000000 + tv.tv_usec;
+        }
+    }
+    if (frame->t_us < 0) { /* no kernel stamp: the time of reading */
+        struct timeval tv;
+        gettimeofday(&tv, NULL);
+        frame->t_us = (int64_t)tv.tv_sec * 1000000 + tv.tv_usec;
+    }
+    frame->extended = (cf.can_id & CAN_EFF_FLAG) != 0;
+    frame->id = cf.can_id & (frame->extended ? CAN_EFF_MASK : CAN_SFF_MASK);
+    frame->dlc = cf.can_dlc;
+    memcpy(frame->data, cf.data, sizeof frame->data);
+    return (cf.can_id & CAN_ERR_FLAG) ? 2 : 1;
+}

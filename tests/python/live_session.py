@@ -1,0 +1,100 @@
+"""One live session of loadidd over LCM, run inside a private network
+namespace by test_live_lcm.py (not collected by pytest):
+
+    live_session.py LOADIDD CONFIG RECORDING LCM_PYTHON_DIR
+
+Sets loopback up with a multicast route, starts loadidd live with the
+recording's can.log as its CAN source (replayed from an epoch 1.5 s ahead),
+publishes the recording's joint states and commands on LCM at the same
+times, and prints as JSON what came back on LOADID_ESTIMATE, LOADID_STATUS
+and LOADID_WRENCH.
+"""
+
+from __future__ import annotations
+
+import json
+import select
+import subprocess
+import sys
+import time
+
+import lcm
+
+URL = "udpm://239.255.76.67:7667?ttl=0"
+
+
+def main():
+    loadidd, config, rec, pydir = sys.argv[1:5]
+    sys.path.insert(0, pydir)
+    import loadid  # lcm-gen's Python types
+
+    subprocess.run(["ip", "link", "set", "lo", "up"], check=True)
+    subprocess.run(["ip", "route", "add", "224.0.0.0/4", "dev", "lo"], check=True)
+
+    first_can = None
+    with open(f"{rec}/can.log") as f:
+        line = f.readline()
+        sec, usec = line[1:line.index(")")].split(".")
+        first_can = int(sec) * 1_000_000 + int(usec)
+    events = [(ev.timestamp, ev.channel, ev.data) for ev in lcm.EventLog(f"{rec}/lcm.log", "r")]
+
+    lc = lcm.LCM(URL)
+    got = {"estimate": [], "status": [], "wrench": []}
+
+    def keep(kind, cls):
+        return lambda ch, data: got[kind].append(cls.decode(data))
+
+    lc.subscribe("LOADID_ESTIMATE", keep("estimate", loadid.estimate_t))
+    lc.subscribe("LOADID_STATUS", keep("status", loadid.status_t))
+    lc.subscribe("LOADID_WRENCH", keep("wrench", loadid.wrench_t))
+
+    epoch = int(time.time() * 1e6) + 1_500_000
+    daemon = subprocess.Popen([loadidd, "--config", config, "--can-file", f"{rec}/can.log",
+                               "--can-file-epoch", str(epoch), "--publish-every", "100"],
+                              stderr=subprocess.PIPE, text=True)
+    shift = epoch - first_can
+
+    def pump(until):
+        while True:
+            left = until - time.time()
+            if left <= 0:
+                return
+            if select.select([lc.fileno()], [], [], min(left, 0.05))[0]:
+                lc.handle()
+
+    for t, channel, data in events:
+        pump((t + shift) / 1e6)
+        if channel == "LOADID_JOINTS":
+            msg = loadid.joint_state_t.decode(data)
+            msg.utime += shift
+        else:
+            msg = loadid.command_t.decode(data)
+            msg.utime += shift
+        lc.publish(channel, msg.encode())
+    # The daemon stops 1 s after its CAN file ends; collect until then.
+    deadline = time.time() + 10
+    while daemon.poll() is None and time.time() < deadline:
+        pump(time.time() + 0.1)
+    if daemon.poll() is None:
+        daemon.terminate()
+    err = daemon.communicate(timeout=10)[1]
+    pump(time.time() + 0.3)
+
+    def est(m):
+        return {"method": m.method, "state": m.state, "samples": m.samples, "phi": list(m.phi),
+                "load_name": m.load_name, "mass": m.mass}
+
+    print(json.dumps({
+        "returncode": daemon.returncode, "stderr": err,
+        "estimate": [est(m) for m in got["estimate"]],
+        "status": [{"state": m.state, "samples_ok": m.samples_ok, "frames_bad": m.frames_bad,
+                    "samples_incomplete": m.samples_incomplete,
+                    "samples_saturated": m.samples_saturated, "sequence_gaps": m.sequence_gaps,
+                    "joint_msgs_bad": m.joint_msgs_bad, "p50": m.loop_us_p50,
+                    "p99": m.loop_us_p99, "max": m.loop_us_max} for m in got["status"]],
+        "wrench": [list(m.force) + list(m.torque) for m in got["wrench"]],
+    }))
+
+
+if __name__ == "__main__":
+    main()
