@@ -51,7 +51,7 @@ typedef struct {
     loadid_can_frame_t next;
     int64_t file_t0, wall_t0;     /* file: first frame's time, its wall time */
     double mono_t0;
-    int file_done;
+    int file_done;                /* the file is replayed; the CAN input is quiet */
     int64_t can_errors, can_reopens, error_frames;
     uint32_t hist[HIST_BINS];
     double loop_max_us;
@@ -299,7 +299,6 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
             add_fd(ep, L.can_fd, TAG_CAN);
         }
     }
-    int64_t file_end_ticks = -1;
     while (rc == 0) {
         struct epoll_event evs[8];
         int n = epoll_wait(ep, evs, 8, 1000);
@@ -329,8 +328,6 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                             if (L.can_fd >= 0) add_fd(ep, L.can_fd, TAG_CAN), L.can_reopens++;
                         }
                     }
-                    if (L.file_done && file_end_ticks < 0) file_end_ticks = L.ticks + 100;
-                    if (file_end_ticks >= 0 && L.ticks >= file_end_ticks) stop = 1;
                     break;
                 case TAG_SIGNAL: stop = 1; break;
             }

@@ -15,7 +15,8 @@ typedef struct {
     int verbose;
 } loadid_live_options_t;
 
-/* Runs until SIGTERM or SIGINT (or the end of can_file plus 1 s). Returns
+/* Runs until SIGTERM or SIGINT (a replayed can_file just falls silent at
+ * its end). Returns
  * the exit status: 0, or 1 after printing why on stderr. */
 int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     const loadid_live_options_t *opt);

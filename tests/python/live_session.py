@@ -1,13 +1,14 @@
 """One live session of loadidd over LCM, run inside a private network
 namespace by test_live_lcm.py (not collected by pytest):
 
-    live_session.py LOADIDD CONFIG RECORDING LCM_PYTHON_DIR
+    live_session.py LOADIDD CONFIG RECORDING LCM_PYTHON_DIR LOADID_CLI
 
 Sets loopback up with a multicast route, starts loadidd live with the
 recording's can.log as its CAN source (replayed from an epoch 1.5 s ahead),
 publishes the recording's joint states and commands on LCM at the same
 times, and prints as JSON what came back on LOADID_ESTIMATE, LOADID_STATUS
-and LOADID_WRENCH.
+and LOADID_WRENCH; then asks the CLI for the status, resets the daemon
+through the CLI, asks again, and stops the daemon with SIGTERM.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ URL = "udpm://239.255.76.67:7667?ttl=0"
 
 
 def main():
-    loadidd, config, rec, pydir = sys.argv[1:5]
+    loadidd, config, rec, pydir, cli = sys.argv[1:6]
     sys.path.insert(0, pydir)
     import loadid  # lcm-gen's Python types
 
@@ -71,12 +72,17 @@ def main():
             msg = loadid.command_t.decode(data)
             msg.utime += shift
         lc.publish(channel, msg.encode())
-    # The daemon stops 1 s after its CAN file ends; collect until then.
-    deadline = time.time() + 10
-    while daemon.poll() is None and time.time() < deadline:
-        pump(time.time() + 0.1)
-    if daemon.poll() is None:
-        daemon.terminate()
+    pump(time.time() + 1.5)  # the last samples and the wrenches after DONE
+
+    def cli_run(*args):
+        r = subprocess.run([cli, "--config", config, *args], capture_output=True, text=True,
+                           timeout=20)
+        return {"rc": r.returncode, "out": r.stdout, "err": r.stderr}
+
+    cli_log = [cli_run("status", "--timeout", "3"), cli_run("reset")]
+    pump(time.time() + 0.2)
+    cli_log.append(cli_run("status", "--timeout", "3"))
+    daemon.terminate()  # SIGTERM: a clean stop
     err = daemon.communicate(timeout=10)[1]
     pump(time.time() + 0.3)
 
@@ -85,7 +91,7 @@ def main():
                 "load_name": m.load_name, "mass": m.mass}
 
     print(json.dumps({
-        "returncode": daemon.returncode, "stderr": err,
+        "returncode": daemon.returncode, "stderr": err, "cli": cli_log,
         "estimate": [est(m) for m in got["estimate"]],
         "status": [{"state": m.state, "samples_ok": m.samples_ok, "frames_bad": m.frames_bad,
                     "samples_incomplete": m.samples_incomplete,

@@ -33,7 +33,7 @@ def session(recording, tmp_path_factory):
     cfg.write_text("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n")
     r = subprocess.run(["unshare", "-n", sys.executable, str(HERE / "live_session.py"),
                         program("LOADIDD_EXE"), str(cfg), str(recording),
-                        os.environ["LOADID_LCM_PYTHON_DIR"]],
+                        os.environ["LOADID_LCM_PYTHON_DIR"], program("LOADID_CLI_EXE")],
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
@@ -41,8 +41,16 @@ def session(recording, tmp_path_factory):
     return out
 
 
-def test_daemon_runs_and_stops_cleanly(session):
+def test_daemon_runs_and_stops_cleanly_on_sigterm(session):
     assert session["returncode"] == 0, session["stderr"]
+
+
+def test_cli_status_and_reset(session):
+    before, reset, after = session["cli"]
+    assert before["rc"] == 0 and "state DONE" in before["out"], before
+    assert "samples_ok " in before["out"] and "loop_us p50" in before["out"]
+    assert reset["rc"] == 0, reset
+    assert after["rc"] == 0 and "state IDLE" in after["out"], after
 
 
 def test_estimates_come_while_estimating_and_at_done(session):
@@ -73,8 +81,10 @@ def test_final_estimates_equal_offline(session, recording):
 def test_status_counts_and_loop_times(session):
     st = session["status"]
     assert len(st) >= 3
-    last = st[-1]
-    assert last["state"] == 3 and last["samples_ok"] >= 3000
+    done = [s for s in st if s["state"] == 3]
+    assert done and st[-1]["state"] == 0  # DONE, then IDLE after the CLI's reset
+    last = done[-1]
+    assert last["samples_ok"] >= 3000
     assert last["frames_bad"] == 0 and last["sequence_gaps"] == 0 and last["joint_msgs_bad"] == 0
     assert any(s["max"] > 0 for s in st) and all(s["p50"] <= s["p99"] <= s["max"] + 0.5 for s in st)
 
