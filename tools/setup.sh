@@ -58,7 +58,7 @@ commands:
                virtual environment build/venv (pinned, tools/requirements.txt)
   demo [ARGS]  deps, build the release preset, run loadid-demo with ARGS
   test         deps, build the release and asan presets, run every ctest test
-  bench        deps, build the release preset, run bench_core, bench_core_float, bench_signals
+  bench        deps, build the release preset, run bench_core, bench_core_float, bench_signals, bench_pipeline
 EOF
 }
 
@@ -231,6 +231,13 @@ main() {
       build/release/tests/bench_core_float
       say "running build/release/tests/bench_signals"
       build/release/tests/bench_signals
+      say "simulating a recording for bench_pipeline (build/release/bench-recording)"
+      build/release/tools/loadid-traj --quiet --monte-carlo 300 --candidates 1 --max-evals 800 \
+        --out build/release/bench-trajectory.yaml
+      build/release/tools/loadid-sim --trajectory build/release/bench-trajectory.yaml \
+        --out build/release/bench-recording
+      say "running build/release/tests/bench_pipeline"
+      build/release/tests/bench_pipeline host/config/loadid.yaml build/release/bench-recording
       ;;
     -h | --help | help)
       usage
