@@ -234,6 +234,20 @@ static const loadid_yaml_node_t *first_present(const loadid_yaml_node_t *a,
     return a ? a : b ? b : c;
 }
 
+/* An optional path, resolved against the configuration file's folder. */
+static int read_path(loadid_yaml_node_t *map, const char *config_path, const char *key, char *out,
+                     size_t size) {
+    loadid_yaml_node_t *n = map ? loadid_yaml_get(map, key) : NULL;
+    if (!n) return 0;
+    char rel[LOADID_PATH_MAX];
+    TRY(loadid_yaml_as_string(n, rel, sizeof rel));
+    if (!rel[0]) return loadid_yaml_fail(n, "must not be empty");
+    TRY(resolve_path(n, config_path, rel, out, size));
+    return 0;
+fail:
+    return -EINVAL;
+}
+
 static int read_robot(loadid_yaml_node_t *root, const char *path, loadid_config_t *c) {
     loadid_yaml_node_t *s = NULL, *n;
     TRY(read_section(root, "robot", &s));
@@ -321,7 +335,7 @@ static int read_methods(loadid_yaml_node_t *seq, loadid_config_t *c) {
     return 0;
 }
 
-static int read_estimation(loadid_yaml_node_t *root, loadid_config_t *c) {
+static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_config_t *c) {
     loadid_yaml_node_t *s = NULL, *n;
     char word[64];
     TRY(read_section(root, "estimation", &s));
@@ -353,6 +367,10 @@ static int read_estimation(loadid_yaml_node_t *root, loadid_config_t *c) {
 
     TRY(read_section(root, "distal", &s));
     TRY(read_numbers(s, "phi", c->distal_phi, 10, 10, NULL, ANY));
+
+    TRY(read_section(root, "results", &s));
+    TRY(read_path(s, path, "directory", c->results_directory, sizeof c->results_directory));
+    TRY(read_path(s, path, "load", c->results_load, sizeof c->results_load));
 
     TRY(read_section(root, "noise", &s));
     TRY(read_number(s, "force", &c->noise_force, POSITIVE));
@@ -502,7 +520,7 @@ int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t
     }
     TRY(read_robot(root, path, c));
     TRY(read_can_jr3_lcm(root, c));
-    TRY(read_estimation(root, c));
+    TRY(read_estimation(root, path, c));
     TRY(read_trajectory(root, c));
     TRY(read_simulation(root, c));
     loadid_yaml_report_unused(doc, forward_warning, &sink);

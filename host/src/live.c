@@ -36,6 +36,7 @@
 #include "loadid/candump.h"
 #include "loadid/pipeline.h"
 #include "loadid/socketcan.h"
+#include "saved_result.h"
 
 #define HIST_BINS 20001 /* 0.5 us bins up to 10 ms; the last holds the rest */
 
@@ -56,6 +57,7 @@ typedef struct {
     uint32_t hist[HIST_BINS];
     double loop_max_us;
     int ticks;
+    int done_pending;             /* DONE reached: save the estimate */
 } live_t;
 
 static int64_t wall_us(void) {
@@ -104,6 +106,7 @@ static void on_wrench(void *ctx, int64_t utime, const double f[3], const double 
 static void on_state(void *ctx, int64_t utime, int state, const char *reason) {
     live_t *L = ctx;
     static const char *names[] = {"IDLE", "ZEROING", "ESTIMATING", "DONE", "FAILED"};
+    if (state == LOADID_STATE_DONE) L->done_pending = 1;
     if (L->opt->verbose || state == LOADID_STATE_FAILED)
         fprintf(stderr, "loadidd: %lld: %s%s%s\n", (long long)utime, names[state],
                 *reason ? ": " : "", reason);
@@ -229,6 +232,20 @@ static int add_fd(int ep, int fd, uint32_t tag) {
     return epoll_ctl(ep, EPOLL_CTL_ADD, fd, &ev);
 }
 
+/* A finished estimate into results.directory (when configured). */
+static void save_done(live_t *L) {
+    L->done_pending = 0;
+    loadid_pipeline_estimate_t e;
+    loadid_pipeline_compensation_t c;
+    if (!L->cfg->results_directory[0] || loadid_pipeline_final(L->pipe, &e, &c) != 0) return;
+    char path[4400], err[4600];
+    if (loadid_saved_result_write(L->cfg->results_directory, &e, &c, path, sizeof path, err,
+                                  sizeof err) != 0)
+        fprintf(stderr, "loadidd: %s\n", err);
+    else
+        fprintf(stderr, "loadidd: saved %s\n", path);
+}
+
 enum { TAG_LCM = 1, TAG_CAN, TAG_FILE, TAG_TICK, TAG_SIGNAL };
 
 int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
@@ -250,6 +267,24 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         fprintf(stderr, "loadidd: cannot open LCM at %s\n", cfg->lcm_url);
         loadid_pipeline_destroy(L.pipe);
         return 1;
+    }
+    if (cfg->results_load[0]) {
+        loadid_pipeline_estimate_t e;
+        loadid_pipeline_compensation_t c;
+        char lerr[4600];
+        int lr = loadid_saved_result_read(cfg->results_load, &e, &c, lerr, sizeof lerr);
+        if (lr == 0 && loadid_pipeline_restore(L.pipe, &e, &c) != 0) {
+            snprintf(lerr, sizeof lerr, "%s: not an estimate of this configuration (method, "
+                                        "estimation.offset_model)", cfg->results_load);
+            lr = -EINVAL;
+        }
+        if (lr != 0) {
+            fprintf(stderr, "loadidd: results.load: %s\n", lerr);
+            lcm_destroy(L.lcm);
+            loadid_pipeline_destroy(L.pipe);
+            return 1;
+        }
+        fprintf(stderr, "loadidd: loaded %s (%s): wrench_t flows\n", cfg->results_load, e.load_name);
     }
     loadid_joint_state_t_subscribe(L.lcm, "LOADID_JOINTS", on_joints, &L);
     loadid_command_t_subscribe(L.lcm, "LOADID_COMMAND", on_command, &L);
@@ -332,6 +367,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                 case TAG_SIGNAL: stop = 1; break;
             }
         }
+        if (L.done_pending) save_done(&L);
         if (stop) break;
     }
     publish_status(&L);

@@ -31,6 +31,7 @@
 #include "loadid/urdf.h"
 #include "live.h"
 #include "result_json.h"
+#include "saved_result.h"
 
 static const char *prog = "loadidd";
 
@@ -102,6 +103,16 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
         fprintf(stderr, "%s: %s: estimation failed: %s\n", prog, dir, st.reason);
         status = 1;
     } else {
+        loadid_pipeline_estimate_t fin;
+        loadid_pipeline_compensation_t comp;
+        char path[4400];
+        if (cfg->results_directory[0] && loadid_pipeline_final(p, &fin, &comp) == 0) {
+            if (loadid_saved_result_write(cfg->results_directory, &fin, &comp, path, sizeof path,
+                                          err, sizeof err) != 0)
+                fprintf(stderr, "%s: %s\n", prog, err);
+            else if (verbose)
+                fprintf(stderr, "%s: saved %s\n", prog, path);
+        }
         loadid_pipeline_estimate_t est[LOADID_MAX_METHODS];
         const int n = loadid_pipeline_estimates(p, est, LOADID_MAX_METHODS);
         FILE *out = result_path ? fopen(result_path, "w") : stdout;

@@ -445,3 +445,42 @@ int loadid_pipeline_estimates(const loadid_pipeline_t *p, loadid_pipeline_estima
 }
 
 int loadid_pipeline_started(const loadid_pipeline_t *p) { return p->started; }
+
+int loadid_pipeline_final(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *est,
+                          loadid_pipeline_compensation_t *comp) {
+    if (p->state != LOADID_STATE_DONE || p->primary < 0) return -ENODATA;
+    *est = p->latest[p->primary];
+    memset(comp, 0, sizeof *comp);
+    comp->n_params = p->n_params;
+    for (int i = 0; i < p->n_params; ++i) comp->phi_total[i] = (double)p->phi_total[i];
+    comp->zeroed = p->zeroed;
+    for (int i = 0; i < 6; ++i) comp->y0[i] = (double)p->y0[i];
+    for (int i = 0; i < 3; ++i) comp->g_init[i] = (double)p->g_init[i];
+    return 0;
+}
+
+int loadid_pipeline_restore(loadid_pipeline_t *p, const loadid_pipeline_estimate_t *est,
+                            const loadid_pipeline_compensation_t *comp) {
+    if (comp->n_params != p->n_params) return -EINVAL;
+    if (p->n_params == LOADID_NPHI && !comp->zeroed) return -EINVAL;
+    int m = -1;
+    for (int i = 0; i < p->num_methods && m < 0; ++i)
+        if (p->cfg.methods[i] == est->method) m = i;
+    if (m < 0) return -EINVAL;
+    for (int i = 0; i < comp->n_params; ++i)
+        if (!isfinite(comp->phi_total[i])) return -EINVAL;
+    for (int i = 0; i < 6; ++i)
+        if (!isfinite(comp->y0[i])) return -EINVAL;
+    for (int i = 0; i < 3; ++i)
+        if (!isfinite(comp->g_init[i])) return -EINVAL;
+    for (int i = 0; i < comp->n_params; ++i) p->phi_total[i] = (loadid_real_t)comp->phi_total[i];
+    for (int i = 0; i < 6; ++i) p->y0[i] = (loadid_real_t)comp->y0[i];
+    for (int i = 0; i < 3; ++i) p->g_init[i] = (loadid_real_t)comp->g_init[i];
+    p->zeroed = comp->zeroed;
+    p->latest[m] = *est;
+    p->latest[m].state = LOADID_STATE_DONE;
+    snprintf(p->load_name, sizeof p->load_name, "%s", est->load_name);
+    p->primary = m;
+    p->state = LOADID_STATE_DONE;
+    return 0;
+}

@@ -1,7 +1,7 @@
 """One live session of loadidd over LCM, run inside a private network
 namespace by test_live_lcm.py (not collected by pytest):
 
-    live_session.py LOADIDD CONFIG RECORDING LCM_PYTHON_DIR LOADID_CLI
+    live_session.py LOADIDD CONFIG RECORDING LCM_PYTHON_DIR LOADID_CLI [no-commands]
 
 Sets loopback up with a multicast route, starts loadidd live with the
 recording's can.log as its CAN source (replayed from an epoch 1.5 s ahead),
@@ -26,6 +26,7 @@ URL = "udpm://239.255.76.67:7667?ttl=0"
 
 def main():
     loadidd, config, rec, pydir, cli = sys.argv[1:6]
+    with_commands = len(sys.argv) < 7 or sys.argv[6] != "no-commands"
     sys.path.insert(0, pydir)
     import loadid  # lcm-gen's Python types
 
@@ -68,9 +69,11 @@ def main():
         if channel == "LOADID_JOINTS":
             msg = loadid.joint_state_t.decode(data)
             msg.utime += shift
-        else:
+        elif with_commands:
             msg = loadid.command_t.decode(data)
             msg.utime += shift
+        else:
+            continue
         lc.publish(channel, msg.encode())
     pump(time.time() + 1.5)  # the last samples and the wrenches after DONE
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import pathlib
 import shutil
 import subprocess
@@ -24,20 +25,28 @@ from recordings import program
 HERE = pathlib.Path(__file__).resolve().parent
 
 
-@pytest.fixture(scope="module")
-def session(recording, tmp_path_factory):
+def run_session(cfg, recording, *extra):
     if os.geteuid() != 0 or not shutil.which("unshare") or not shutil.which("ip"):
         pytest.fail("the LCM test needs root, unshare (util-linux) and ip (iproute2): "
                     "CI runs as root and tools/setup.sh installs both")
-    cfg = tmp_path_factory.mktemp("live") / "c.yaml"
-    cfg.write_text("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n")
     r = subprocess.run(["unshare", "-n", sys.executable, str(HERE / "live_session.py"),
                         program("LOADIDD_EXE"), str(cfg), str(recording),
-                        os.environ["LOADID_LCM_PYTHON_DIR"], program("LOADID_CLI_EXE")],
+                        os.environ["LOADID_LCM_PYTHON_DIR"], program("LOADID_CLI_EXE"), *extra],
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
     out["config"] = cfg
+    return out
+
+
+@pytest.fixture(scope="module")
+def session(recording, tmp_path_factory):
+    d = tmp_path_factory.mktemp("live")
+    cfg = d / "c.yaml"
+    cfg.write_text("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n"
+                   f"results:\n  directory: {d / 'results'}\n")
+    out = run_session(cfg, recording)
+    out["results"] = d / "results"
     return out
 
 
@@ -94,3 +103,27 @@ def test_compensated_wrench_flows_once_done(session):
     assert len(w) > 500  # the 0.8 s of rest and fade-out after DONE
     # What is left is noise (0.1 N, 0.005 N m) and model error, not the load.
     assert np.median(np.abs(w[:, :3])) < 0.5 and np.median(np.abs(w[:, 3:])) < 0.05
+
+
+def test_saved_estimate_restarts_wrench_compensation(session, recording, tmp_path):
+    """A finished estimate is saved (YAML with a URDF <inertial>); a daemon
+    started from it is DONE at once and compensates every sample, with no
+    ZERO or START."""
+    latest = session["results"] / "latest.yaml"
+    text = latest.read_text()
+    rtls = next(e for e in session["estimate"] if e["state"] == 3 and e["method"] == 3)
+    phi = [float(x) for x in re.search(r"^phi: \[(.*)\]$", text, re.M).group(1).split(",")]
+    np.testing.assert_array_equal(phi, rtls["phi"])  # %.17g: exact
+    assert "<inertial>" in text and f'<mass value="{rtls["mass"]:.9g}"/>' in text
+    cfg = tmp_path / "again.yaml"
+    cfg.write_text(f"lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\nresults:\n  load: {latest}\n")
+    again = run_session(cfg, recording, "no-commands")
+    assert again["returncode"] == 0, again["stderr"]
+    assert "loaded" in again["stderr"]
+    assert len(again["wrench"]) >= 3000  # every sample of the recording
+    assert all(s["state"] == 3 for s in again["status"][:2])
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(f"lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\nresults:\n  load: {tmp_path / 'none.yaml'}\n")
+    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(bad)], capture_output=True,
+                       text=True, timeout=30)
+    assert r.returncode == 1 and "results.load" in r.stderr and "cannot read" in r.stderr

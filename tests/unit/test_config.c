@@ -507,6 +507,14 @@ static void relative_urdf_paths_follow_the_config_file(void **state) {
     load_ok(write_file("sub/c.yaml", "robot:\n  urdf: /abs/arm.urdf\n"), &c, &w);
     assert_string_equal(c.robot_urdf, "/abs/arm.urdf");
 
+    /* results.directory and results.load follow the same rule; default "". */
+    assert_string_equal(c.results_directory, "");
+    assert_string_equal(c.results_load, "");
+    load_ok(write_file("sub/d.yaml", "results:\n  directory: out\n  load: /r/latest.yaml\n"), &c, &w);
+    snprintf(expected, sizeof expected, "%s/sub/out", g_dir);
+    assert_string_equal(c.results_directory, expected);
+    assert_string_equal(c.results_load, "/r/latest.yaml");
+
     /* A relative config path: made absolute against the working directory. */
     char cwd[512], here[512];
     assert_non_null(getcwd(cwd, sizeof cwd));

@@ -75,6 +75,14 @@ typedef struct {
     /* distal: */
     double distal_phi[10];              /* default 0 */
 
+    /* results: (loadid) saved estimates. directory: where loadidd writes
+     * each finished estimate (YAML with a URDF <inertial> snippet) and
+     * latest.yaml; "" (default) saves nothing. load: a saved estimate to
+     * start from (state DONE, wrench_t flowing); "" (default) none. Both
+     * relative to the configuration file. */
+    char results_directory[LOADID_PATH_MAX];
+    char results_load[LOADID_PATH_MAX];
+
     /* noise: (loadid) standard deviations of the measurements, for the
      * estimators' weights (loadid_est_weights_from_noise) and the
      * trajectory designer's column scaling */

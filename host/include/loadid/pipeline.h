@@ -129,6 +129,27 @@ void loadid_pipeline_status(const loadid_pipeline_t *p, loadid_pipeline_status_t
 int loadid_pipeline_estimates(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *out,
                               int max);
 
+/* What compensating the wrench takes, besides the estimate: phi of load
+ * and distal part together (and the offset, for 16 parameters), and the
+ * zeroing (y0: the wrench averaged at zeroing, g_init: gravity in S then). */
+typedef struct {
+    int n_params;                 /* 10 (zeroing) or 16 ([A E6]) */
+    double phi_total[16];
+    int zeroed;
+    double y0[6], g_init[3];
+} loadid_pipeline_compensation_t;
+
+/* The primary estimate (the first configured method with one) and its
+ * compensation, once DONE. Returns 0, or -ENODATA (no estimate). */
+int loadid_pipeline_final(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *est,
+                          loadid_pipeline_compensation_t *comp);
+
+/* Starts from a saved estimate: state DONE, wrench_t flowing. Returns 0,
+ * or -EINVAL (n_params or the method not this configuration's, a value
+ * not finite, zeroing data missing for 10 parameters). */
+int loadid_pipeline_restore(loadid_pipeline_t *p, const loadid_pipeline_estimate_t *est,
+                            const loadid_pipeline_compensation_t *comp);
+
 /* Whether START was ever seen since create or RESET. */
 int loadid_pipeline_started(const loadid_pipeline_t *p);
 

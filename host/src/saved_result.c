@@ -1,0 +1,141 @@
+/* Saved estimates (saved_result.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "saved_result.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "loadid/core.h"
+#include "loadid/yaml_tree.h"
+
+static void list(FILE *f, const double *v, int n) {
+    fputc('[', f);
+    for (int i = 0; i < n; ++i) fprintf(f, "%s%.17g", i ? ", " : "", v[i]);
+    fputc(']', f);
+}
+
+static int write_one(const char *path, const loadid_pipeline_estimate_t *e,
+                     const loadid_pipeline_compensation_t *c) {
+    FILE *f = fopen(path, "w");
+    if (!f) return -errno;
+    fprintf(f, "# A load estimated by loadidd (Kubus et al. 2008); inertia about the COM, axes\n"
+               "# of the sensor frame S. compensation: what wrench_t needs after a restart.\n");
+    fprintf(f, "format: loadid-estimate-1\nmethod: %s\nload_name: \"",
+            loadid_method_name((loadid_method_t)e->method));
+    for (const char *s = e->load_name; *s; ++s)
+        if (*s != '"' && *s != '\\' && (unsigned char)*s >= 0x20) fputc(*s, f);
+    fprintf(f, "\"\nutime: %lld\nsamples: %lld\nphi: ", (long long)e->utime, (long long)e->samples);
+    list(f, e->phi, 10);
+    fprintf(f, "\noffset: ");
+    list(f, e->offset, 6);
+    fprintf(f, "\nmass: %.17g\ncom: ", e->mass);
+    list(f, e->com, 3);
+    fprintf(f, "\ninertia_com: ");
+    list(f, e->inertia_com, 6);
+    fprintf(f, "\ncondition_number: %.17g\nphysically_consistent: %s\n", e->condition_number,
+            e->physically_consistent ? "true" : "false");
+    fprintf(f, "compensation:\n  n_params: %d\n  phi_total: ", c->n_params);
+    list(f, c->phi_total, c->n_params);
+    fprintf(f, "\n  zeroed: %s\n  y0: ", c->zeroed ? "true" : "false");
+    list(f, c->y0, 6);
+    fprintf(f, "\n  g_init: ");
+    list(f, c->g_init, 3);
+    /* URDF <inertial>: origin at the COM, inertia about it in S's axes. */
+    fprintf(f, "\nurdf_inertial: |\n  <inertial>\n"
+               "    <origin xyz=\"%.9g %.9g %.9g\" rpy=\"0 0 0\"/>\n    <mass value=\"%.9g\"/>\n"
+               "    <inertia ixx=\"%.9g\" ixy=\"%.9g\" ixz=\"%.9g\" iyy=\"%.9g\" iyz=\"%.9g\" "
+               "izz=\"%.9g\"/>\n  </inertial>\n",
+            e->com[0], e->com[1], e->com[2], e->mass, e->inertia_com[0], e->inertia_com[1],
+            e->inertia_com[2], e->inertia_com[3], e->inertia_com[4], e->inertia_com[5]);
+    int rc = ferror(f) ? -EIO : 0;
+    if (fclose(f) != 0 && !rc) rc = -errno;
+    return rc;
+}
+
+int loadid_saved_result_write(const char *dir, const loadid_pipeline_estimate_t *est,
+                              const loadid_pipeline_compensation_t *comp, char *path,
+                              size_t pathlen, char *err, size_t errlen) {
+    if (mkdir(dir, 0777) != 0 && errno != EEXIST) {
+        int e = errno;
+        snprintf(err, errlen, "%s: cannot create: %s", dir, strerror(e));
+        return -e;
+    }
+    char name[4400], latest[4400], safe[LOADID_LOAD_NAME_MAX];
+    size_t k = 0;
+    for (const char *s = est->load_name; *s && k + 1 < sizeof safe; ++s)
+        safe[k++] = (*s == '/' || *s == '.' || (unsigned char)*s < 0x20) ? '_' : *s;
+    safe[k] = 0;
+    snprintf(name, sizeof name, "%s/%s-%lld.yaml", dir, k ? safe : "load", (long long)est->utime);
+    snprintf(latest, sizeof latest, "%s/latest.yaml", dir);
+    int rc = write_one(name, est, comp);
+    if (rc == 0) rc = write_one(latest, est, comp);
+    if (rc != 0) snprintf(err, errlen, "%s: cannot write: %s", name, strerror(-rc));
+    else if (path) snprintf(path, pathlen, "%s", name);
+    return rc;
+}
+
+static int need(int rc, loadid_yaml_node_t *map, const char *key) {
+    if (rc == 0) return loadid_yaml_fail(map, "missing key '%s'", key);
+    return rc < 0 ? rc : 0;
+}
+
+static int read_doc(loadid_yaml_doc_t *doc, loadid_pipeline_estimate_t *e,
+                    loadid_pipeline_compensation_t *c) {
+    loadid_yaml_node_t *root = loadid_yaml_root(doc), *comp;
+    if (!root || loadid_yaml_kind(root) != LOADID_YAML_MAPPING)
+        return root ? loadid_yaml_fail(root, "expected a mapping") : -EINVAL;
+    char format[64], method[32];
+    int rc, m;
+    uint64_t samples = 0;
+    memset(e, 0, sizeof *e);
+    memset(c, 0, sizeof *c);
+    if ((rc = need(loadid_yaml_get_string(root, "format", format, sizeof format), root, "format")))
+        return rc;
+    if (strcmp(format, "loadid-estimate-1") != 0)
+        return loadid_yaml_fail(loadid_yaml_get(root, "format"), "unknown format '%s'", format);
+    if ((rc = need(loadid_yaml_get_string(root, "method", method, sizeof method), root, "method")))
+        return rc;
+    if ((m = loadid_method_from_name(method)) < 0)
+        return loadid_yaml_fail(loadid_yaml_get(root, "method"), "unknown method '%s'", method);
+    e->method = m;
+    uint64_t ut = 0;
+    if ((rc = need(loadid_yaml_get_string(root, "load_name", e->load_name, sizeof e->load_name), root, "load_name")) ||
+        (rc = need(loadid_yaml_get_uint64(root, "utime", &ut), root, "utime")) ||
+        (rc = need(loadid_yaml_get_uint64(root, "samples", &samples), root, "samples")) ||
+        (rc = need(loadid_yaml_get_doubles(root, "phi", e->phi, 10), root, "phi")) ||
+        (rc = need(loadid_yaml_get_doubles(root, "offset", e->offset, 6), root, "offset")) ||
+        (rc = need(loadid_yaml_get_double(root, "mass", &e->mass), root, "mass")) ||
+        (rc = need(loadid_yaml_get_doubles(root, "com", e->com, 3), root, "com")) ||
+        (rc = need(loadid_yaml_get_doubles(root, "inertia_com", e->inertia_com, 6), root, "inertia_com")) ||
+        (rc = need(loadid_yaml_get_double(root, "condition_number", &e->condition_number), root, "condition_number")) ||
+        (rc = need(loadid_yaml_get_bool(root, "physically_consistent", &e->physically_consistent), root, "physically_consistent")) ||
+        (rc = need(loadid_yaml_get_mapping(root, "compensation", &comp), root, "compensation")) ||
+        (rc = need(loadid_yaml_get_int(comp, "n_params", &c->n_params), comp, "n_params")))
+        return rc;
+    e->utime = (int64_t)ut;
+    e->samples = (int64_t)samples;
+    e->valid = 1;
+    e->state = LOADID_STATE_DONE;
+    if (c->n_params != LOADID_NPHI && c->n_params != LOADID_NPHI_OFFSET)
+        return loadid_yaml_fail(loadid_yaml_get(comp, "n_params"), "must be 10 or 16");
+    if ((rc = need(loadid_yaml_get_doubles(comp, "phi_total", c->phi_total, (size_t)c->n_params), comp, "phi_total")) ||
+        (rc = need(loadid_yaml_get_bool(comp, "zeroed", &c->zeroed), comp, "zeroed")) ||
+        (rc = need(loadid_yaml_get_doubles(comp, "y0", c->y0, 6), comp, "y0")) ||
+        (rc = need(loadid_yaml_get_doubles(comp, "g_init", c->g_init, 3), comp, "g_init")))
+        return rc;
+    return 0;
+}
+
+int loadid_saved_result_read(const char *file, loadid_pipeline_estimate_t *est,
+                             loadid_pipeline_compensation_t *comp, char *err, size_t errlen) {
+    loadid_yaml_doc_t *doc = NULL;
+    int rc = loadid_yaml_load_file(file, &doc, err, errlen);
+    if (rc != 0) return rc;
+    rc = read_doc(doc, est, comp);
+    if (rc != 0) snprintf(err, errlen, "%s", loadid_yaml_error(doc));
+    loadid_yaml_free(doc);
+    return rc;
+}
