@@ -29,6 +29,8 @@ DEBIAN_PACKAGES=(
   libyaml-dev libnlopt-dev
   # the LCM test's private network namespace (ip; unshare is in util-linux)
   iproute2
+  # sd_notify for the systemd unit (Type=notify, WatchdogSec)
+  libsystemd-dev
   # the Debian Python that makes build/venv (its packages come from PyPI)
   python3 python3-venv
   # HTTPS to PyPI for pip, and git for working in the clone

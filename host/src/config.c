@@ -78,6 +78,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->kalman_jerk_psd = (double)jf.jerk_psd;
     cfg->kalman_meas_sigma = (double)jf.meas_sigma;
     cfg->kalman_max_joint_age_s = (double)sig.max_joint_age_us / 1e6;
+    cfg->rt_cpu = -1;
     cfg->kalman_spec_sigma = 0.5;
     cfg->kalman_alpha_sigma = 1.0;
 
@@ -234,6 +235,23 @@ static const loadid_yaml_node_t *first_present(const loadid_yaml_node_t *a,
     return a ? a : b ? b : c;
 }
 
+/* An optional integer in [lo, hi]. */
+static int read_int_range(loadid_yaml_node_t *map, const char *key, int *out, int lo, int hi) {
+    loadid_yaml_node_t *n = map ? loadid_yaml_get(map, key) : NULL;
+    if (!n) return 0;
+    int v;
+    if (loadid_yaml_as_int(n, &v) < 0) return -EINVAL;
+    if (v < lo || v > hi) return loadid_yaml_fail(n, "must be %d..%d, got %d", lo, hi, v);
+    *out = v;
+    return 0;
+}
+
+/* An optional boolean. */
+static int read_bool_key(loadid_yaml_node_t *map, const char *key, int *out) {
+    loadid_yaml_node_t *n = map ? loadid_yaml_get(map, key) : NULL;
+    return n ? loadid_yaml_as_bool(n, out) : 0;
+}
+
 /* An optional path, resolved against the configuration file's folder. */
 static int read_path(loadid_yaml_node_t *map, const char *config_path, const char *key, char *out,
                      size_t size) {
@@ -367,6 +385,11 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
 
     TRY(read_section(root, "distal", &s));
     TRY(read_numbers(s, "phi", c->distal_phi, 10, 10, NULL, ANY));
+
+    TRY(read_section(root, "realtime", &s));
+    TRY(read_int_range(s, "priority", &c->rt_priority, 0, 99));
+    TRY(read_bool_key(s, "lock_memory", &c->rt_lock_memory));
+    TRY(read_int_range(s, "cpu", &c->rt_cpu, -1, 4095));
 
     TRY(read_section(root, "results", &s));
     TRY(read_path(s, path, "directory", c->results_directory, sizeof c->results_directory));

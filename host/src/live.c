@@ -36,6 +36,7 @@
 #include "loadid/candump.h"
 #include "loadid/pipeline.h"
 #include "loadid/socketcan.h"
+#include "realtime.h"
 #include "saved_result.h"
 
 #define HIST_BINS 20001 /* 0.5 us bins up to 10 ms; the last holds the rest */
@@ -334,6 +335,11 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
             add_fd(ep, L.can_fd, TAG_CAN);
         }
     }
+    if (rc == 0 && loadid_realtime_setup(cfg, err, sizeof err) != 0) {
+        fprintf(stderr, "loadidd: %s\n", err);
+        rc = 1;
+    }
+    if (rc == 0) loadid_notify_ready("estimating loads; LCM and CAN open");
     while (rc == 0) {
         struct epoll_event evs[8];
         int n = epoll_wait(ep, evs, 8, 1000);
@@ -355,6 +361,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                 case TAG_TICK:
                     if (read(tick_fd, &v, sizeof v) < 0) break;
                     loadid_pipeline_tick(L.pipe, wall_us());
+                    loadid_notify_watchdog((int64_t)mono_us());
                     if (++L.ticks % 100 == 0) {
                         publish_status(&L);
                         if (L.can_fd < 0 && !opt->can_file) { /* reopen a vanished interface */
@@ -370,6 +377,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         if (L.done_pending) save_done(&L);
         if (stop) break;
     }
+    loadid_notify_stopping();
     publish_status(&L);
     if (L.can_fd >= 0) close(L.can_fd);
     loadid_candump_reader_close(L.can_reader);

@@ -14,9 +14,12 @@ through the CLI, asks again, and stops the daemon with SIGTERM.
 from __future__ import annotations
 
 import json
+import os
 import select
+import socket
 import subprocess
 import sys
+import tempfile
 import time
 
 import lcm
@@ -50,14 +53,34 @@ def main():
     lc.subscribe("LOADID_STATUS", keep("status", loadid.status_t))
     lc.subscribe("LOADID_WRENCH", keep("wrench", loadid.wrench_t))
 
+    # systemd's side of Type=notify: a datagram socket in NOTIFY_SOCKET.
+    notify_path = os.path.join(tempfile.mkdtemp(), "notify")
+    notify = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+    notify.bind(notify_path)
+    notify.setblocking(False)
+    env = dict(os.environ, NOTIFY_SOCKET=notify_path, WATCHDOG_USEC="200000")
+
     epoch = int(time.time() * 1e6) + 1_500_000
     daemon = subprocess.Popen([loadidd, "--config", config, "--can-file", f"{rec}/can.log",
                                "--can-file-epoch", str(epoch), "--publish-every", "100"],
-                              stderr=subprocess.PIPE, text=True)
+                              stderr=subprocess.PIPE, text=True, env=env)
+    sched = None  # /proc/PID/stat: fields 40 (rt_priority) and 41 (policy)
     shift = epoch - first_can
+
+    notes = []
+
+    def drain_notify():
+        # systemd reads its socket at once; so must we, or the daemon's
+        # sd_notify blocks when the datagram queue is full.
+        while True:
+            try:
+                notes.append(notify.recv(4096).decode())
+            except BlockingIOError:
+                return
 
     def pump(until):
         while True:
+            drain_notify()
             left = until - time.time()
             if left <= 0:
                 return
@@ -75,6 +98,14 @@ def main():
         else:
             continue
         lc.publish(channel, msg.encode())
+        if sched is None and daemon.poll() is None and t + shift > epoch + 500_000:
+            status = open(f"/proc/{daemon.pid}/status").read()
+            stat = open(f"/proc/{daemon.pid}/stat").read().rsplit(")", 1)[1].split()
+            sched = {"policy": int(stat[38]), "rt_priority": int(stat[37]),
+                     "cpus": next(l.split()[1] for l in status.splitlines()
+                                  if l.startswith("Cpus_allowed_list")),
+                     "vmlck_kb": int(next(l.split()[1] for l in status.splitlines()
+                                          if l.startswith("VmLck")))}
     pump(time.time() + 1.5)  # the last samples and the wrenches after DONE
 
     def cli_run(*args):
@@ -86,15 +117,21 @@ def main():
     pump(time.time() + 0.2)
     cli_log.append(cli_run("status", "--timeout", "3"))
     daemon.terminate()  # SIGTERM: a clean stop
+    deadline = time.time() + 10
+    while daemon.poll() is None and time.time() < deadline:
+        drain_notify()
+        time.sleep(0.02)
     err = daemon.communicate(timeout=10)[1]
     pump(time.time() + 0.3)
+    drain_notify()
 
     def est(m):
         return {"method": m.method, "state": m.state, "samples": m.samples, "phi": list(m.phi),
                 "load_name": m.load_name, "mass": m.mass}
 
     print(json.dumps({
-        "returncode": daemon.returncode, "stderr": err, "cli": cli_log,
+        "returncode": daemon.returncode, "stderr": err, "cli": cli_log, "notify": notes,
+        "sched": sched,
         "estimate": [est(m) for m in got["estimate"]],
         "status": [{"state": m.state, "samples_ok": m.samples_ok, "frames_bad": m.frames_bad,
                     "samples_incomplete": m.samples_incomplete,

@@ -44,7 +44,8 @@ def session(recording, tmp_path_factory):
     d = tmp_path_factory.mktemp("live")
     cfg = d / "c.yaml"
     cfg.write_text("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n"
-                   f"results:\n  directory: {d / 'results'}\n")
+                   f"results:\n  directory: {d / 'results'}\n"
+                   "realtime:\n  priority: 10\n  lock_memory: true\n  cpu: 0\n")
     out = run_session(cfg, recording)
     out["results"] = d / "results"
     return out
@@ -52,6 +53,16 @@ def session(recording, tmp_path_factory):
 
 def test_daemon_runs_and_stops_cleanly_on_sigterm(session):
     assert session["returncode"] == 0, session["stderr"]
+
+
+def test_realtime_setup_and_systemd_notifications(session):
+    sched = session["sched"]
+    assert sched["policy"] == 1 and sched["rt_priority"] == 10  # SCHED_FIFO, priority 10
+    assert sched["cpus"] == "0" and sched["vmlck_kb"] > 0    # pinned, mlockall
+    notes = session["notify"]
+    assert notes[0].startswith("READY=1")
+    assert sum(n == "WATCHDOG=1" for n in notes) >= 10       # 0.1 s pings over seconds
+    assert notes[-1] == "STOPPING=1"
 
 
 def test_cli_status_and_reset(session):

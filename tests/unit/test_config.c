@@ -507,6 +507,17 @@ static void relative_urdf_paths_follow_the_config_file(void **state) {
     load_ok(write_file("sub/c.yaml", "robot:\n  urdf: /abs/arm.urdf\n"), &c, &w);
     assert_string_equal(c.robot_urdf, "/abs/arm.urdf");
 
+    /* realtime: off by default; values and ranges checked. */
+    assert_int_equal(c.rt_priority, 0);
+    assert_int_equal(c.rt_lock_memory, 0);
+    assert_int_equal(c.rt_cpu, -1);
+    load_ok(write_file("sub/rt.yaml", "realtime:\n  priority: 80\n  lock_memory: true\n  cpu: 1\n"),
+            &c, &w);
+    assert_int_equal(c.rt_priority, 80);
+    assert_int_equal(c.rt_lock_memory, 1);
+    assert_int_equal(c.rt_cpu, 1);
+    expect_error("realtime:\n  priority: 100\n", "2: realtime.priority: must be 0..99, got 100");
+
     /* results.directory and results.load follow the same rule; default "". */
     assert_string_equal(c.results_directory, "");
     assert_string_equal(c.results_load, "");

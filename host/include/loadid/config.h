@@ -75,6 +75,14 @@ typedef struct {
     /* distal: */
     double distal_phi[10];              /* default 0 */
 
+    /* realtime: (loadid) the live service's scheduling. priority: SCHED_FIFO
+     * priority 1..99, 0 (default) leaves the normal scheduler; lock_memory:
+     * mlockall, default false; cpu: pin to this CPU, -1 (default) any. A
+     * setting that cannot be applied is an error at start-up. */
+    int rt_priority;
+    int rt_lock_memory;
+    int rt_cpu;
+
     /* results: (loadid) saved estimates. directory: where loadidd writes
      * each finished estimate (YAML with a URDF <inertial> snippet) and
      * latest.yaml; "" (default) saves nothing. load: a saved estimate to
