@@ -31,6 +31,8 @@ DEBIAN_PACKAGES=(
   iproute2
   # sd_notify for the systemd unit (Type=notify, WatchdogSec)
   libsystemd-dev
+  # the vcan test's virtual machine: qemu, busybox for its initramfs, cpio
+  qemu-system-x86 busybox-static cpio
   # the Debian Python that makes build/venv (its packages come from PyPI)
   python3 python3-venv
   # HTTPS to PyPI for pip, and git for working in the clone

@@ -85,3 +85,45 @@ int loadid_socketcan_read(int fd, loadid_can_frame_t *frame) {
     memcpy(frame->data, cf.data, sizeof frame->data);
     return (cf.can_id & CAN_ERR_FLAG) ? 2 : 1;
 }
+
+int loadid_socketcan_open_tx(const char *ifname, char *err, size_t errlen) {
+    if (!ifname || strlen(ifname) >= IFNAMSIZ) {
+        snprintf(err, errlen, "invalid CAN interface name");
+        return -EINVAL;
+    }
+    int fd = socket(PF_CAN, SOCK_RAW | SOCK_CLOEXEC, CAN_RAW);
+    if (fd < 0) {
+        int e = errno;
+        snprintf(err, errlen, "%s: no CAN socket: %s", ifname, strerror(e));
+        return -e;
+    }
+    struct ifreq ifr;
+    memset(&ifr, 0, sizeof ifr);
+    memcpy(ifr.ifr_name, ifname, strlen(ifname));
+    struct sockaddr_can addr;
+    memset(&addr, 0, sizeof addr);
+    addr.can_family = AF_CAN;
+    const char *what = NULL;
+    if (ioctl(fd, SIOCGIFINDEX, &ifr) < 0) what = "no such interface";
+    else if ((addr.can_ifindex = ifr.ifr_ifindex),
+             setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, NULL, 0) < 0) what = "filter";
+    else if (bind(fd, (struct sockaddr *)&addr, sizeof addr) < 0) what = "bind";
+    if (what) {
+        int e = errno;
+        snprintf(err, errlen, "%s: %s: %s", ifname, what, strerror(e));
+        close(fd);
+        return -e;
+    }
+    return fd;
+}
+
+int loadid_socketcan_write(int fd, const loadid_can_frame_t *frame) {
+    struct can_frame cf;
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = frame->id | (frame->extended ? CAN_EFF_FLAG : 0);
+    cf.can_dlc = frame->dlc > 8 ? 8 : frame->dlc;
+    memcpy(cf.data, frame->data, cf.can_dlc);
+    ssize_t n = write(fd, &cf, sizeof cf);
+    if (n == (ssize_t)sizeof cf) return 0;
+    return n < 0 ? -errno : -EIO;
+}

@@ -378,6 +378,19 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         if (stop) break;
     }
     loadid_notify_stopping();
+    if (opt->verbose) {
+        loadid_pipeline_status_t st;
+        loadid_pipeline_status(L.pipe, &st);
+        fprintf(stderr,
+                "loadidd: samples ok %lld, used %lld, frames bad %lld, incomplete %lld, "
+                "saturated %lld, faulty %lld, gaps %lld, joint msgs bad %lld, stale %lld, "
+                "CAN errors %lld, error frames %lld\n",
+                (long long)st.samples_ok, (long long)st.samples_used, (long long)st.frames_bad,
+                (long long)st.samples_incomplete, (long long)st.samples_saturated,
+                (long long)st.samples_faulty, (long long)st.sequence_gaps,
+                (long long)st.joint_msgs_bad, (long long)st.samples_stale,
+                (long long)L.can_errors, (long long)L.error_frames);
+    }
     publish_status(&L);
     if (L.can_fd >= 0) close(L.can_fd);
     loadid_candump_reader_close(L.can_reader);

@@ -26,6 +26,14 @@ int loadid_socketcan_open(const char *ifname, uint32_t base_id, char *err, size_
  * holds it), or -errno (-ENETDOWN, -ENODEV: the interface went away; reopen). */
 int loadid_socketcan_read(int fd, loadid_can_frame_t *frame);
 
+/* A socket for sending (no receive filter: it reads nothing). Returns the
+ * file descriptor, or -errno with a reason in err. */
+int loadid_socketcan_open_tx(const char *ifname, char *err, size_t errlen);
+
+/* Sends one classic frame. Returns 0, -EAGAIN (the queue is full; retry),
+ * or -errno. */
+int loadid_socketcan_write(int fd, const loadid_can_frame_t *frame);
+
 #ifdef __cplusplus
 }
 #endif

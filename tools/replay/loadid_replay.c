@@ -1,0 +1,156 @@
+/*
+ * loadid-replay: puts a recording (can.log, lcm.log) back on a CAN
+ * interface and on LCM together, both streams keeping their recorded
+ * relative timing (times a speed factor), the LCM messages' utime
+ * rewritten to now (CAN frames get the kernel's receive time anyway).
+ * --loop repeats it. Recording a live session into the same format is
+ * `candump -l -s 0 <if>` (can-utils) beside `lcm-logger` (lcm): see the
+ * README.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include <errno.h>
+#include <getopt.h>
+#include <lcm/lcm.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "lcmtypes/loadid_command_t.h"
+#include "lcmtypes/loadid_joint_state_t.h"
+#include "loadid/recording.h"
+#include "loadid/socketcan.h"
+
+static const char *prog = "loadid-replay";
+
+static void usage(FILE *out) {
+    fprintf(out,
+            "usage: %s --interface IF [--lcm-url URL] [--speed X] [--loop] RECORDING_DIR\n"
+            "Replays can.log onto the CAN interface IF and lcm.log onto LCM (default\n"
+            "udpm://239.255.76.67:7667?ttl=0) with their recorded relative timing scaled by\n"
+            "1/X (default 1), utime fields rewritten to now. --loop repeats until killed.\n",
+            prog);
+}
+
+static int64_t wall_us(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
+}
+
+static void sleep_until(int64_t t_us) {
+    for (;;) {
+        int64_t left = t_us - wall_us();
+        if (left <= 0) return;
+        struct timespec ts = {left / 1000000, (left % 1000000) * 1000};
+        nanosleep(&ts, NULL);
+    }
+}
+
+/* Re-publishes an LCM event with its utime moved to now's time base. */
+static void republish(lcm_t *lcm, const loadid_rec_event_t *ev, int64_t shift) {
+    if (strcmp(ev->channel, "LOADID_JOINTS") == 0) {
+        loadid_joint_state_t m;
+        if (loadid_joint_state_t_decode(ev->data, 0, ev->datalen, &m) < 0) return;
+        m.utime += shift;
+        loadid_joint_state_t_publish(lcm, ev->channel, &m);
+        loadid_joint_state_t_decode_cleanup(&m);
+    } else if (strcmp(ev->channel, "LOADID_COMMAND") == 0) {
+        loadid_command_t m;
+        if (loadid_command_t_decode(ev->data, 0, ev->datalen, &m) < 0) return;
+        m.utime += shift;
+        loadid_command_t_publish(lcm, ev->channel, &m);
+        loadid_command_t_decode_cleanup(&m);
+    } else {
+        lcm_publish(lcm, ev->channel, ev->data, (unsigned)ev->datalen); /* as recorded */
+    }
+}
+
+static int play(const char *dir, int can_fd, lcm_t *lcm, double speed, int64_t *sent) {
+    char err[4400];
+    loadid_recording_reader_t *rec = NULL;
+    if (loadid_recording_reader_open(dir, &rec, err, sizeof err) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, err);
+        return 1;
+    }
+    loadid_rec_event_t ev;
+    int rc, have_t0 = 0;
+    int64_t t0 = 0, start = 0;
+    while ((rc = loadid_recording_reader_next(rec, &ev)) == 1) {
+        if (ev.kind == LOADID_REC_BAD_LINE) continue;
+        if (!have_t0) t0 = ev.t_us, start = wall_us() + 100000, have_t0 = 1;
+        const int64_t due = start + (int64_t)llround((double)(ev.t_us - t0) / speed);
+        sleep_until(due);
+        if (ev.kind == LOADID_REC_CAN) {
+            int w;
+            while ((w = loadid_socketcan_write(can_fd, &ev.can)) == -EAGAIN || w == -ENOBUFS) {
+                struct timespec ts = {0, 20000};
+                nanosleep(&ts, NULL);
+            }
+            if (w != 0) {
+                fprintf(stderr, "%s: CAN write: %s\n", prog, strerror(-w));
+                loadid_recording_reader_close(rec);
+                return 1;
+            }
+        } else {
+            republish(lcm, &ev, due - ev.t_us);
+        }
+        (*sent)++;
+    }
+    loadid_recording_reader_close(rec);
+    return rc < 0 ? 1 : 0;
+}
+
+int main(int argc, char **argv) {
+    const char *ifname = NULL, *url = "udpm://239.255.76.67:7667?ttl=0";
+    double speed = 1;
+    int loop = 0;
+    static const struct option opts[] = {
+        {"interface", required_argument, NULL, 'i'}, {"lcm-url", required_argument, NULL, 'u'},
+        {"speed", required_argument, NULL, 's'},     {"loop", no_argument, NULL, 'l'},
+        {"help", no_argument, NULL, 'h'},            {NULL, 0, NULL, 0}};
+    int c;
+    while ((c = getopt_long(argc, argv, "i:u:s:lh", opts, NULL)) != -1) {
+        switch (c) {
+            case 'i': ifname = optarg; break;
+            case 'u': url = optarg; break;
+            case 's': {
+                char *end;
+                speed = strtod(optarg, &end);
+                if (*end || end == optarg || !(speed > 0) || !isfinite(speed)) {
+                    fprintf(stderr, "%s: --speed: a factor > 0, not %s\n", prog, optarg);
+                    return 2;
+                }
+                break;
+            }
+            case 'l': loop = 1; break;
+            case 'h': usage(stdout); return 0;
+            default: usage(stderr); return 2;
+        }
+    }
+    if (optind + 1 != argc || !ifname) {
+        usage(stderr);
+        return 2;
+    }
+    char err[512];
+    const int can_fd = loadid_socketcan_open_tx(ifname, err, sizeof err);
+    if (can_fd < 0) {
+        fprintf(stderr, "%s: %s\n", prog, err);
+        return 1;
+    }
+    lcm_t *lcm = lcm_create(url);
+    if (!lcm) {
+        fprintf(stderr, "%s: cannot open LCM at %s\n", prog, url);
+        return 1;
+    }
+    int64_t sent = 0;
+    int rc;
+    do {
+        rc = play(argv[optind], can_fd, lcm, speed, &sent);
+    } while (loop && rc == 0);
+    fprintf(stderr, "%s: %lld frames and messages replayed\n", prog, (long long)sent);
+    lcm_destroy(lcm);
+    return rc;
+}
