@@ -15,12 +15,17 @@
 #include <sys/time.h>
 #include <unistd.h>
 
-int loadid_socketcan_open(const char *ifname, uint32_t base_id, char *err, size_t errlen) {
-    if (!ifname || strlen(ifname) >= IFNAMSIZ || base_id > 0x7FB) {
-        snprintf(err, errlen, "invalid CAN interface name or base id");
+/* A CAN_RAW socket (flags: SOCK_NONBLOCK or 0) bound to ifname after
+ * configure(fd, ctx) set its options. Returns the fd or -errno with a
+ * reason in err. */
+static int open_bound(const char *ifname, int flags, int (*configure)(int fd, const void *ctx,
+                                                                       const char **what),
+                      const void *ctx, char *err, size_t errlen) {
+    if (!ifname || strlen(ifname) >= IFNAMSIZ) {
+        snprintf(err, errlen, "invalid CAN interface name");
         return -EINVAL;
     }
-    int fd = socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
+    int fd = socket(PF_CAN, SOCK_RAW | flags | SOCK_CLOEXEC, CAN_RAW);
     if (fd < 0) {
         int e = errno;
         snprintf(err, errlen, "%s: no CAN socket: %s", ifname, strerror(e));
@@ -32,21 +37,11 @@ int loadid_socketcan_open(const char *ifname, uint32_t base_id, char *err, size_
     struct sockaddr_can addr;
     memset(&addr, 0, sizeof addr);
     addr.can_family = AF_CAN;
-    /* The JR3's five identifiers only, standard frames; and error frames. */
-    struct can_filter filter[5];
-    for (int i = 0; i < 5; ++i) {
-        filter[i].can_id = base_id + (uint32_t)i;
-        filter[i].can_mask = CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG;
-    }
-    const can_err_mask_t err_mask = CAN_ERR_MASK;
-    const int one = 1;
     const char *what = NULL;
     if (ioctl(fd, SIOCGIFINDEX, &ifr) < 0) what = "no such interface";
+    else if (configure(fd, ctx, &what) < 0) (void)0;
     else if ((addr.can_ifindex = ifr.ifr_ifindex),
-             setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filter, sizeof filter) < 0) what = "filter";
-    else if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) < 0) what = "error filter";
-    else if (setsockopt(fd, SOL_SOCKET, SO_TIMESTAMP, &one, sizeof one) < 0) what = "time stamps";
-    else if (bind(fd, (struct sockaddr *)&addr, sizeof addr) < 0) what = "bind";
+             bind(fd, (struct sockaddr *)&addr, sizeof addr) < 0) what = "bind";
     if (what) {
         int e = errno;
         snprintf(err, errlen, "%s: %s: %s", ifname, what, strerror(e));
@@ -54,6 +49,46 @@ int loadid_socketcan_open(const char *ifname, uint32_t base_id, char *err, size_
         return -e;
     }
     return fd;
+}
+
+/* Receiving: the JR3's five identifiers only (standard data frames), error
+ * frames, and the kernel's receive time stamps. */
+static int configure_rx(int fd, const void *ctx, const char **what) {
+    const uint32_t base_id = *(const uint32_t *)ctx;
+    struct can_filter filter[5];
+    for (int i = 0; i < 5; ++i) {
+        filter[i].can_id = base_id + (uint32_t)i;
+        filter[i].can_mask = CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG;
+    }
+    const can_err_mask_t err_mask = CAN_ERR_MASK;
+    const int one = 1;
+    if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filter, sizeof filter) < 0) *what = "filter";
+    else if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) < 0)
+        *what = "error filter";
+    else if (setsockopt(fd, SOL_SOCKET, SO_TIMESTAMP, &one, sizeof one) < 0) *what = "time stamps";
+    if (*what) return -1;
+    /* Room for bursts (about 4 s of the JR3's 4 kHz frames): a loop held up
+     * reads them late instead of the kernel dropping them. Beyond rmem_max
+     * only with CAP_NET_ADMIN; the default otherwise, not an error. */
+    const int bytes = 1 << 20;
+    if (setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &bytes, sizeof bytes) < 0)
+        (void)setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &bytes, sizeof bytes);
+    return 0;
+}
+
+/* Sending: receive nothing. */
+static int configure_tx(int fd, const void *ctx, const char **what) {
+    (void)ctx;
+    if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, NULL, 0) < 0) *what = "filter";
+    return *what ? -1 : 0;
+}
+
+int loadid_socketcan_open(const char *ifname, uint32_t base_id, char *err, size_t errlen) {
+    if (base_id > 0x7FB) {
+        snprintf(err, errlen, "invalid CAN base id 0x%X", (unsigned)base_id);
+        return -EINVAL;
+    }
+    return open_bound(ifname, SOCK_NONBLOCK, configure_rx, &base_id, err, errlen);
 }
 
 int loadid_socketcan_read(int fd, loadid_can_frame_t *frame) {
@@ -87,34 +122,7 @@ int loadid_socketcan_read(int fd, loadid_can_frame_t *frame) {
 }
 
 int loadid_socketcan_open_tx(const char *ifname, char *err, size_t errlen) {
-    if (!ifname || strlen(ifname) >= IFNAMSIZ) {
-        snprintf(err, errlen, "invalid CAN interface name");
-        return -EINVAL;
-    }
-    int fd = socket(PF_CAN, SOCK_RAW | SOCK_CLOEXEC, CAN_RAW);
-    if (fd < 0) {
-        int e = errno;
-        snprintf(err, errlen, "%s: no CAN socket: %s", ifname, strerror(e));
-        return -e;
-    }
-    struct ifreq ifr;
-    memset(&ifr, 0, sizeof ifr);
-    memcpy(ifr.ifr_name, ifname, strlen(ifname));
-    struct sockaddr_can addr;
-    memset(&addr, 0, sizeof addr);
-    addr.can_family = AF_CAN;
-    const char *what = NULL;
-    if (ioctl(fd, SIOCGIFINDEX, &ifr) < 0) what = "no such interface";
-    else if ((addr.can_ifindex = ifr.ifr_ifindex),
-             setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, NULL, 0) < 0) what = "filter";
-    else if (bind(fd, (struct sockaddr *)&addr, sizeof addr) < 0) what = "bind";
-    if (what) {
-        int e = errno;
-        snprintf(err, errlen, "%s: %s: %s", ifname, what, strerror(e));
-        close(fd);
-        return -e;
-    }
-    return fd;
+    return open_bound(ifname, 0, configure_tx, NULL, err, errlen);
 }
 
 int loadid_socketcan_write(int fd, const loadid_can_frame_t *frame) {

@@ -84,7 +84,7 @@ ip link set vcan0 up
 cd /data
 # canplayer's syntax: every line of can.log reaches vcan0.
 lines=$(wc -l < can.log)
-candump -L vcan0 > /tmp/dump.log &
+candump -r 4194304 -L vcan0 > /tmp/dump.log &
 dumper=$!
 sleep 0.5
 canplayer -I can.log

@@ -2,7 +2,8 @@
  * loadid-replay: puts a recording (can.log, lcm.log) back on a CAN
  * interface and on LCM together, both streams keeping their recorded
  * relative timing (times a speed factor), the LCM messages' utime
- * rewritten to now (CAN frames get the kernel's receive time anyway).
+ * rewritten to their scheduled time now (CAN frames get the kernel's
+ * receive time anyway).
  * --loop repeats it. Recording a live session into the same format is
  * `candump -l -s 0 <if>` (can-utils) beside `lcm-logger` (lcm): see the
  * README.
@@ -95,6 +96,10 @@ static int play(const char *dir, int can_fd, lcm_t *lcm, double speed, int64_t *
                 return 1;
             }
         } else {
+            /* The scheduled time, not the moment it goes out: a joint
+             * state's utime is when the joints were sampled, and the
+             * filters differentiate by it (send-time jitter there cost the
+             * VM test 67 % of the mass). */
             republish(lcm, &ev, due - ev.t_us);
         }
         (*sent)++;
