@@ -64,7 +64,7 @@ commands:
                virtual environment build/venv (pinned, tools/requirements.txt)
   demo [ARGS]  deps, build the release preset, run loadid-demo with ARGS
   test         deps, build the release and asan presets, run every ctest test
-  bench        deps, build the release preset, run bench_core, bench_core_float, bench_signals, bench_pipeline
+  bench        deps, build the release preset, run bench_core, bench_core_float, bench_signals, bench_pipeline, bench_live
 EOF
 }
 
@@ -244,6 +244,10 @@ main() {
         --out build/release/bench-recording
       say "running build/release/tests/bench_pipeline"
       build/release/tests/bench_pipeline host/config/loadid.yaml build/release/bench-recording
+      say "running tests/bench/bench_live.py (the live loop in a network namespace; needs root)"
+      build/venv/bin/python tests/bench/bench_live.py "$PWD/build/release/host/loadidd" \
+        "$PWD/build/release/host/loadid" "$PWD/build/release/bench-recording" \
+        "$PWD/build/release/proto/python"
       ;;
     -h | --help | help)
       usage

@@ -9,9 +9,9 @@
  *     publishes status_t once a second;
  *   - a signalfd for SIGTERM and SIGINT (a clean stop).
  * Estimates go out as estimate_t on LOADID_ESTIMATE, compensated wrenches
- * as wrench_t on LOADID_WRENCH. The loop time of each CAN frame's
- * processing is kept in a histogram: status_t's p50, p99 and max over the
- * last second.
+ * as wrench_t on LOADID_WRENCH. The loop time, the handling of each input
+ * event (a CAN read, an LCM message, a tick), is kept in a histogram:
+ * status_t's p50, p99 and max over the last second.
  */
 #define _GNU_SOURCE
 #include "live.h"
@@ -181,9 +181,12 @@ static void on_command(const lcm_recv_buf_t *rbuf, const char *channel,
 }
 
 static void feed_frame(live_t *L, const loadid_can_frame_t *f) {
-    const double t0 = mono_us();
     loadid_pipeline_can_frame(L->pipe, f);
-    const double dt = mono_us() - t0;
+}
+
+/* The loop time: handling one input event (a CAN read, an LCM message,
+ * which is where waiting samples are estimated, or a tick). */
+static void record_loop_time(live_t *L, double dt) {
     int bin = (int)(dt * 2);
     L->hist[bin < HIST_BINS ? bin : HIST_BINS - 1]++;
     if (dt > L->loop_max_us) L->loop_max_us = dt;
@@ -351,6 +354,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         int stop = 0;
         for (int i = 0; i < n; ++i) {
             uint64_t v;
+            const double t_event = mono_us();
             switch (evs[i].data.u32) {
                 case TAG_LCM: lcm_handle(L.lcm); break;
                 case TAG_CAN: read_socket(&L); break;
@@ -373,6 +377,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     break;
                 case TAG_SIGNAL: stop = 1; break;
             }
+            if (evs[i].data.u32 != TAG_SIGNAL) record_loop_time(&L, mono_us() - t_event);
         }
         if (L.done_pending) save_done(&L);
         if (stop) break;

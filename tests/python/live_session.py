@@ -107,6 +107,11 @@ def main():
                      "vmlck_kb": int(next(l.split()[1] for l in status.splitlines()
                                           if l.startswith("VmLck")))}
     pump(time.time() + 1.5)  # the last samples and the wrenches after DONE
+    memory = {}
+    if daemon.poll() is None:
+        for line in open(f"/proc/{daemon.pid}/status"):
+            if line.startswith(("VmHWM", "VmRSS", "VmLck")):
+                memory[line.split(":")[0]] = int(line.split()[1])
 
     def cli_run(*args):
         r = subprocess.run([cli, "--config", config, *args], capture_output=True, text=True,
@@ -131,7 +136,7 @@ def main():
 
     print(json.dumps({
         "returncode": daemon.returncode, "stderr": err, "cli": cli_log, "notify": notes,
-        "sched": sched,
+        "sched": sched, "memory_kb": memory,
         "estimate": [est(m) for m in got["estimate"]],
         "status": [{"state": m.state, "samples_ok": m.samples_ok, "frames_bad": m.frames_bad,
                     "samples_incomplete": m.samples_incomplete,
