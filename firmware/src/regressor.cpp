@@ -2,6 +2,7 @@
 #include "loadid/regressor.h"
 
 #include <cerrno>
+#include <cstring>
 
 #include "finite.hpp"
 #include "regressor.hpp"
@@ -34,6 +35,19 @@ extern "C" int loadid_regressor_with_offset(const loadid_real_t A[6 * 10],
     Eigen::Map<Regressor<16>> out(A16);
     out.leftCols<10>() = ConstRegressorMap<10>(A);
     out.rightCols<6>().setIdentity();  // [A E6]: y = A phi + o
+    return 0;
+}
+
+extern "C" int loadid_regressor_model(const loadid_real_t spec[3], const loadid_real_t omega[3],
+                                      const loadid_real_t alpha[3], int n_params,
+                                      const loadid_real_t g_init[3], loadid_real_t *A) {
+    if (!A || (n_params != LOADID_NPHI && n_params != LOADID_NPHI_OFFSET)) return -EINVAL;
+    loadid_real_t A10[LOADID_NROWS * LOADID_NPHI];
+    int rc = loadid_regressor(spec, omega, alpha, A10);
+    if (rc == 0 && n_params == LOADID_NPHI && g_init) rc = loadid_regressor_add_zeroing(g_init, A10);
+    if (rc != 0) return rc;
+    if (n_params == LOADID_NPHI_OFFSET) return loadid_regressor_with_offset(A10, A);
+    std::memcpy(A, A10, sizeof A10);
     return 0;
 }
 

@@ -317,13 +317,7 @@ void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
  * term of eqs. (7)-(9), or [A E6]. */
 static int data_matrix(const loadid_pipeline_t *p, const loadid_regressor_input_t *in,
                        loadid_real_t A[6 * 16]) {
-    loadid_real_t A10[60];
-    int rc = loadid_regressor(in->spec, in->omega, in->alpha, A10);
-    if (rc != 0) return rc;
-    if (p->n_params == LOADID_NPHI_OFFSET) return loadid_regressor_with_offset(A10, A);
-    rc = loadid_regressor_add_zeroing(p->g_init, A10);
-    memcpy(A, A10, sizeof A10);
-    return rc;
+    return loadid_regressor_model(in->spec, in->omega, in->alpha, p->n_params, p->g_init, A);
 }
 
 static void on_sample(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {

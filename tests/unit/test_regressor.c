@@ -262,6 +262,52 @@ static void test_zeroing_matches_zeroed_wrench(void **state) {
                   N_RANDOM_STATES, worst);
 }
 
+/* loadid_regressor_model: each of its three models against eqs. (1)-(2)
+ * evaluated directly (tools/synth): the plain wrench, the zeroed wrench
+ * (eqs. 7-9), and the wrench plus an offset ([A E6]). */
+static void test_model_matches_each_wrench(void **state) {
+    (void)state;
+    loadid_rng_t rng;
+    loadid_rng_seed(&rng, 0x5EED0009ULL);
+    for (int k = 0; k < 500; ++k) {
+        double g_init[3], phi[16], A[96], y[6], w[6], w_still[6];
+        loadid_motion_t m, still;
+        random_gravity(&rng, g_init);
+        random_state(&rng, &m);
+        random_load_phi(&rng, phi);
+        uniform_vec3(&rng, 5.0, phi + 10);
+        uniform_vec3(&rng, 0.5, phi + 13);
+        memset(&still, 0, sizeof still);
+        for (int i = 0; i < 3; ++i) still.spec[i] = -g_init[i], still.g[i] = g_init[i];
+        loadid_synth_wrench(phi, &m, w);
+        loadid_synth_wrench(phi, &still, w_still);
+        double scale = fmax(1.0, fmax(max_abs(w, 6), max_abs(w_still, 6)));
+
+        assert_int_equal(loadid_regressor_model(m.spec, m.omega, m.alpha, 10, NULL, A), 0);
+        assert_int_equal(loadid_regressor_apply(A, 10, phi, y), 0);
+        for (int i = 0; i < 6; ++i) ASSERT_CLOSE(y[i], w[i], REL_TOL * scale, "plain model");
+
+        assert_int_equal(loadid_regressor_model(m.spec, m.omega, m.alpha, 10, g_init, A), 0);
+        assert_int_equal(loadid_regressor_apply(A, 10, phi, y), 0);
+        for (int i = 0; i < 6; ++i)
+            ASSERT_CLOSE(y[i], w[i] - w_still[i], REL_TOL * scale, "zeroing model");
+
+        assert_int_equal(loadid_regressor_model(m.spec, m.omega, m.alpha, 16, g_init, A), 0);
+        assert_int_equal(loadid_regressor_apply(A, 16, phi, y), 0);
+        for (int i = 0; i < 6; ++i)
+            ASSERT_CLOSE(y[i], w[i] + phi[10 + i], REL_TOL * scale, "offset model");
+    }
+    double A[96], bad[3] = {0, NAN, 0}, ok[3] = {0, 0, 9.81};
+    memset(A, 0x5a, sizeof A);
+    assert_int_equal(loadid_regressor_model(ok, ok, ok, 12, NULL, A), -EINVAL);
+    assert_int_equal(loadid_regressor_model(ok, ok, ok, 10, NULL, NULL), -EINVAL);
+    assert_int_equal(loadid_regressor_model(ok, bad, ok, 16, NULL, A), LOADID_E_NONFINITE);
+    assert_int_equal(loadid_regressor_model(ok, ok, ok, 10, bad, A), LOADID_E_NONFINITE);
+    double untouched[96];
+    memset(untouched, 0x5a, sizeof untouched);
+    assert_memory_equal(A, untouched, sizeof A);
+}
+
 /* At the zeroing pose itself the zeroed wrench is 0 for every load, so
  * A(-g_init, 0, 0) + Z(g_init) must be exactly the zero matrix. */
 static void test_zeroing_cancels_at_zeroing_pose(void **state) {
@@ -513,6 +559,7 @@ int main(void) {
         cmocka_unit_test(test_zeroing_cancels_at_zeroing_pose),
         cmocka_unit_test(test_zeroing_entries_match_paper_eq7),
         cmocka_unit_test(test_offset_model),
+        cmocka_unit_test(test_model_matches_each_wrench),
         cmocka_unit_test(test_regressor_rejects_nonfinite),
         cmocka_unit_test(test_regressor_rejects_null),
         cmocka_unit_test(test_zeroing_rejects_nonfinite),

@@ -65,13 +65,7 @@ static void usage(FILE *out) {
 static int data_matrix(const kappa_run_t *k, const loadid_real_t spec[3],
                        const loadid_real_t omega[3], const loadid_real_t alpha[3],
                        loadid_real_t A[6 * 16]) {
-    loadid_real_t A10[60];
-    int rc = loadid_regressor(spec, omega, alpha, A10);
-    if (rc != 0) return rc;
-    if (k->n_params == LOADID_NPHI_OFFSET) return loadid_regressor_with_offset(A10, A);
-    rc = loadid_regressor_add_zeroing(k->g_init, A10);
-    memcpy(A, A10, sizeof A10);
-    return rc;
+    return loadid_regressor_model(spec, omega, alpha, k->n_params, k->g_init, A);
 }
 
 static void on_joints(kappa_run_t *k, const loadid_rec_event_t *ev) {

@@ -48,14 +48,10 @@ static int data_matrix(const loadid_traj_problem_t *p, const loadid_real_t g_ini
     loadid_real_t rq[LOADID_MAX_JOINTS], rqd[LOADID_MAX_JOINTS], rqdd[LOADID_MAX_JOINTS];
     to_real(q, rq, n), to_real(qd, rqd, n), to_real(qdd, rqdd, n);
     loadid_kin_state_t st;
-    loadid_real_t A10[60];
     int rc = loadid_kin_eval(p->kin, rq, rqd, rqdd, &st);
-    if (rc == 0) rc = loadid_regressor(st.spec, st.omega, st.alpha, A10);
     if (rc != 0) return rc;
-    if (p->est.n_params == LOADID_NPHI_OFFSET) return loadid_regressor_with_offset(A10, A);
-    if (p->zeroing) rc = loadid_regressor_add_zeroing(g_init, A10);
-    memcpy(A, A10, sizeof A10);
-    return rc;
+    return loadid_regressor_model(st.spec, st.omega, st.alpha, p->est.n_params,
+                                  p->zeroing ? g_init : NULL, A);
 }
 
 static double kappa_with(evaluator_t *ev, const loadid_fourier_traj_t *tr, double rate_hz) {

@@ -41,6 +41,15 @@ int loadid_regressor_add_zeroing(const loadid_real_t g_init[3],
 int loadid_regressor_with_offset(const loadid_real_t A[6 * 10],
                                  loadid_real_t A16[6 * 16]);
 
+/* The data matrix of an estimation model in one call: n_params 10 gives
+ * eq. (6), plus the zeroing term of eqs. (7)-(9) when g_init is not NULL;
+ * n_params 16 gives [A E6] (g_init ignored). A holds 6 x n_params.
+ * Returns 0, -EINVAL (NULL pointer, n_params not 10 or 16) or
+ * LOADID_E_NONFINITE (A untouched). */
+int loadid_regressor_model(const loadid_real_t spec[3], const loadid_real_t omega[3],
+                           const loadid_real_t alpha[3], int n_params,
+                           const loadid_real_t g_init[3], loadid_real_t *A);
+
 /* The wrench the model predicts: y = A phi for an A of n_params columns
  * (10 or 16). Returns 0 or -EINVAL. */
 int loadid_regressor_apply(const loadid_real_t *A, int n_params,
