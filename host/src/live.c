@@ -180,10 +180,6 @@ static void on_command(const lcm_recv_buf_t *rbuf, const char *channel,
     loadid_pipeline_command(L->pipe, t, msg->action, msg->load_name);
 }
 
-static void feed_frame(live_t *L, const loadid_can_frame_t *f) {
-    loadid_pipeline_can_frame(L->pipe, f);
-}
-
 /* The loop time: handling one input event (a CAN read, an LCM message,
  * which is where waiting samples are estimated, or a tick). */
 static void record_loop_time(live_t *L, double dt) {
@@ -197,7 +193,7 @@ static void read_socket(live_t *L) {
     int rc;
     while ((rc = loadid_socketcan_read(L->can_fd, &f)) > 0) {
         if (rc == 2) L->error_frames++;
-        else feed_frame(L, &f);
+        else loadid_pipeline_can_frame(L->pipe, &f);
     }
     if (rc < 0) {
         fprintf(stderr, "loadidd: CAN %s: %s; reopening\n", L->cfg->can_interface, strerror(-rc));
@@ -216,7 +212,7 @@ static void read_file(live_t *L, int timer_fd) {
         if (due > now) break;
         loadid_can_frame_t f = L->next;
         f.t_us = L->wall_t0 + (L->next.t_us - L->file_t0);
-        feed_frame(L, &f);
+        loadid_pipeline_can_frame(L->pipe, &f);
         int rc;
         while ((rc = loadid_candump_read(L->can_reader, &L->next, NULL)) < 0 && rc != -EIO)
             loadid_pipeline_bad_frame(L->pipe);

@@ -28,7 +28,7 @@
 #include "loadid/core.h"
 #include "loadid/offline.h"
 #include "loadid/pipeline.h"
-#include "loadid/urdf.h"
+#include "loadid/setup.h"
 #include "live.h"
 #include "result_json.h"
 #include "saved_result.h"
@@ -46,11 +46,6 @@ static void usage(FILE *out) {
             "as a JSON array to OUT.json (default stdout). Without --offline it runs live:\n"
             "LCM in and out, JR3 frames from SocketCAN or a candump log (--can-file).\n",
             prog, prog);
-}
-
-static void warn(void *ctx, const char *msg) {
-    (void)ctx;
-    fprintf(stderr, "%s: warning: %s\n", prog, msg);
 }
 
 static int verbose;
@@ -169,18 +164,8 @@ int main(int argc, char **argv) {
         return 2;
     }
     static loadid_config_t cfg;
-    char err[1024];
-    loadid_config_default(&cfg);
-    if (loadid_config_load(config_path, &cfg, err, sizeof err, warn, NULL) != 0) {
-        fprintf(stderr, "%s: %s\n", prog, err);
-        return 1;
-    }
     loadid_chain_t chain;
-    if (loadid_urdf_load_file(cfg.robot_urdf, cfg.robot_base_link, cfg.robot_sensor_link, &chain,
-                              err, sizeof err) != 0) {
-        fprintf(stderr, "%s: %s\n", prog, err);
-        return 1;
-    }
+    if (loadid_setup_load(prog, config_path, &cfg, &chain) != 0) return 1;
     if (!offline) {
         loadid_live_options_t live = {.can_file = can_file, .can_file_epoch = epoch,
                                       .publish_every = publish_every, .verbose = verbose};

@@ -10,6 +10,7 @@
 
 #include "loadid/core.h"
 #include "loadid/jr3.h"
+#include "loadid/setup.h"
 
 #define MIN_ZEROING_SAMPLES 10
 #define PENDING_MAX 64 /* samples waiting for joint data: 64 ms at 1 kHz */
@@ -82,39 +83,21 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
     for (int i = 0; i < 10; ++i) p->distal[i] = (loadid_real_t)cfg->distal_phi[i];
 
     loadid_signals_config_t scfg;
-    loadid_signals_config_default(&scfg);
-    scfg.source = (loadid_signal_source_t)cfg->signals;
-    scfg.measured.jerk_psd = scfg.setpoint.jerk_psd = (loadid_real_t)cfg->kalman_jerk_psd;
-    scfg.measured.meas_sigma = scfg.setpoint.meas_sigma = (loadid_real_t)cfg->kalman_meas_sigma;
-    scfg.max_joint_age_us = (int64_t)llround(cfg->kalman_max_joint_age_s * 1e6);
+    loadid_setup_signals(cfg, (loadid_signal_source_t)cfg->signals, &scfg);
     int rc = loadid_signals_create(chain, cfg->robot_gravity, &scfg, &p->sig);
     const char *what = "the joint filters and kinematics";
     if (rc == 0) {
-        loadid_jr3_config_t j = {.base_id = cfg->can_base_id};
-        memcpy(j.full_scale[LOADID_JR3_FORCE], cfg->jr3_fs_force, sizeof cfg->jr3_fs_force);
-        memcpy(j.full_scale[LOADID_JR3_MOMENT], cfg->jr3_fs_moment, sizeof cfg->jr3_fs_moment);
-        memcpy(j.full_scale[LOADID_JR3_LINEAR], cfg->jr3_fs_linear, sizeof cfg->jr3_fs_linear);
-        memcpy(j.full_scale[LOADID_JR3_ANGULAR], cfg->jr3_fs_angular, sizeof cfg->jr3_fs_angular);
+        loadid_jr3_config_t j;
+        loadid_setup_jr3(cfg, &j);
         rc = loadid_jr3_decoder_create(&j, &p->jr3);
         what = "the JR3 decoder";
     }
-    /* The weights follow where a - g and alpha come from (paper Fig. 9): the
-     * JR3's noise (noise.*) or the noise of what the joint filters derive
-     * (kalman.*). Weights that assume the JR3's noise for the filter's far
-     * smaller alpha error cost RTLS 7 % of the mass on a simulated o1. */
-    const int src = cfg->signals;
-    const double sigma_spec = src == LOADID_SIGNALS_SENSOR || src == LOADID_SIGNALS_MIXED
-                                  ? cfg->noise_linear
-                                  : cfg->kalman_spec_sigma;
-    const double sigma_alpha = src == LOADID_SIGNALS_SENSOR ? cfg->noise_angular
-                                                            : cfg->kalman_alpha_sigma;
     p->num_methods = cfg->num_methods;
     for (int m = 0; m < p->num_methods && rc == 0; ++m) {
         loadid_est_config_t e;
         rc = loadid_est_config_default((loadid_method_t)cfg->methods[m], p->n_params, &e);
-        if (rc == 0)
-            rc = loadid_est_weights_from_noise(&e, cfg->noise_force, cfg->noise_torque, sigma_spec,
-                                               sigma_alpha, cfg->noise_omega, cfg->omega_typical);
+        /* The weights follow where a - g and alpha come from (setup.h). */
+        if (rc == 0) rc = loadid_setup_weights(cfg, (loadid_signal_source_t)cfg->signals, &e);
         /* Batch references hold the whole window at up to 2 kHz. */
         e.batch_capacity = (int)ceil(cfg->duration_s * 2000) + 100;
         if (rc == 0) rc = loadid_est_create(&e, &p->est[m]);

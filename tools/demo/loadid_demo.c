@@ -26,7 +26,7 @@
 #include "loadid/offline.h"
 #include "loadid/pipeline.h"
 #include "sim_run.h"
-#include "tool_setup.h"
+#include "loadid/setup.h"
 #include "traj_design.h"
 
 static const char *prog = "loadid-demo";
@@ -89,8 +89,7 @@ static int design(const loadid_config_t *cfg, const loadid_chain_t *chain, uint6
     p.limits.floor_z = 0.1; /* the sensor stays 10 cm above the robot's base plane */
     const int n_params = cfg->offset_model_estimate ? LOADID_NPHI_OFFSET : LOADID_NPHI;
     loadid_est_config_default(LOADID_METHOD_RLS, n_params, &p.est);
-    loadid_est_weights_from_noise(&p.est, cfg->noise_force, cfg->noise_torque, cfg->noise_linear,
-                                  cfg->kalman_alpha_sigma, cfg->noise_omega, cfg->omega_typical);
+    loadid_setup_weights(cfg, (loadid_signal_source_t)cfg->signals, &p.est);
     p.zeroing = !cfg->offset_model_estimate;
     memset(tr, 0, sizeof *tr);
     tr->num_joints = chain->num_joints;
@@ -187,7 +186,7 @@ int main(int argc, char **argv) {
     }
     static loadid_config_t cfg;
     loadid_chain_t chain;
-    if (loadid_tool_setup(prog, NULL, &cfg, &chain) != 0) return 1;
+    if (loadid_setup_load(prog, NULL, &cfg, &chain) != 0) return 1;
     loadid_signal_source_t src;
     if (loadid_signal_source_parse(signals, &src) != 0 ||
         (strcmp(offset_model, "zeroing") && strcmp(offset_model, "estimate"))) {

@@ -29,7 +29,7 @@
 #include "loadid/core.h"
 #include "loadid/jr3.h"
 #include "loadid/recording.h"
-#include "tool_setup.h"
+#include "loadid/setup.h"
 
 static const char *prog = "loadid-kappa";
 static int weighted; /* --weighted: the estimator's D and T, else D = I, T = I */
@@ -58,7 +58,7 @@ static void usage(FILE *out) {
             "from the joint Kalman filter), kappa_kf from the encoders alone; the layout\n"
             "of Table I of Kubus et al. (2008): kappa of the plain data matrix A (eq. 12's\n"
             "Upsilon = A^T A has kappa^2). --weighted gives kappa of D A T with the\n"
-            "estimator's weights from noise.* instead (estimate_t.condition_number).\n",
+            "weights the JR3's noise levels give (noise.*), as loadid-traj's kappa_set.\n",
             prog);
 }
 
@@ -127,19 +127,12 @@ static int run(const loadid_config_t *cfg, const loadid_chain_t *chain, const ch
     k->start_us = INT64_MIN;
     k->n_params = cfg->offset_model_estimate ? LOADID_NPHI_OFFSET : LOADID_NPHI;
     loadid_signals_config_t scfg;
-    loadid_signals_config_default(&scfg);
-    scfg.source = LOADID_SIGNALS_KF;
-    scfg.measured.jerk_psd = scfg.setpoint.jerk_psd = (loadid_real_t)cfg->kalman_jerk_psd;
-    scfg.measured.meas_sigma = scfg.setpoint.meas_sigma = (loadid_real_t)cfg->kalman_meas_sigma;
-    scfg.max_joint_age_us = (int64_t)llround(cfg->kalman_max_joint_age_s * 1e6);
+    loadid_setup_signals(cfg, LOADID_SIGNALS_KF, &scfg);
     loadid_jr3_config_t jcfg;
-    loadid_tool_jr3_config(cfg, &jcfg);
+    loadid_setup_jr3(cfg, &jcfg);
     loadid_est_config_t ecfg;
     loadid_est_config_default(LOADID_METHOD_RLS, k->n_params, &ecfg);
-    if (weighted)
-        loadid_est_weights_from_noise(&ecfg, cfg->noise_force, cfg->noise_torque,
-                                      cfg->noise_linear, cfg->noise_angular, cfg->noise_omega,
-                                      cfg->omega_typical);
+    if (weighted) loadid_setup_weights(cfg, LOADID_SIGNALS_SENSOR, &ecfg);
     ecfg.max_noise_ratio = 1;
     int rc = loadid_signals_create(chain, cfg->robot_gravity, &scfg, &k->sig);
     if (rc == 0) rc = loadid_jr3_decoder_create(&jcfg, &k->jr3);
@@ -207,7 +200,7 @@ int main(int argc, char **argv) {
     }
     static loadid_config_t cfg;
     loadid_chain_t chain;
-    if (loadid_tool_setup(prog, config_path, &cfg, &chain) != 0) return 1;
+    if (loadid_setup_load(prog, config_path, &cfg, &chain) != 0) return 1;
     printf("%-28s %-10s %8s %10s %10s %10s\n", "recording", "load", "samples", "kappa_set",
            "kappa_sens", "kappa_kf");
     int failed = 0;

@@ -30,7 +30,7 @@
 #include "loadid/config.h"
 #include "sim_damage.h"
 #include "sim_run.h"
-#include "tool_setup.h"
+#include "loadid/setup.h"
 #include "traj_file.h"
 
 static const char *prog = "loadid-sim";
@@ -128,7 +128,7 @@ int main(int argc, char **argv) {
         usage(stderr);
         return 2;
     }
-    if (loadid_tool_setup(prog, config_path, &s.cfg, &s.chain) != 0) return 1;
+    if (loadid_setup_load(prog, config_path, &s.cfg, &s.chain) != 0) return 1;
     if (load_phi && parse_phi(load_phi, s.cfg.sim_load_phi) != 0) {
         fprintf(stderr, "%s: --load-phi: expected 10 comma-separated numbers: %s\n", prog, load_phi);
         return 2;

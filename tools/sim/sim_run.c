@@ -11,7 +11,7 @@
 #include "loadid/config.h"
 #include "loadid/core.h"
 #include "loadid/jr3.h"
-#include "tool_setup.h"
+#include "loadid/setup.h"
 #include "loadid_synth.h"
 #include "recording_writer.h"
 #include "sim_run.h"
@@ -259,7 +259,7 @@ int loadid_sim_run(const loadid_sim_options_t *o, loadid_sim_summary_t *sum, cha
                         "zeroing.window_s after ZERO at %.2f s\n", s->cfg.sim_still_s, ZERO_AT_S);
     int rc = loadid_kin_create(&s->chain, s->cfg.robot_gravity, &s->kin);
     if (rc != 0) return fail(s, err, errlen, rc, "cannot build the kinematics");
-    loadid_tool_jr3_config(&s->cfg, &s->jr3);
+    loadid_setup_jr3(&s->cfg, &s->jr3);
     if (loadid_jr3_config_check(&s->jr3) != 0)
         return fail(s, err, errlen, -EINVAL, "invalid JR3 configuration (can.base_id, jr3.*)");
     loadid_rng_seed(&s->rng, o->seed);

@@ -18,7 +18,7 @@
 
 #include "loadid/config.h"
 #include "loadid/core.h"
-#include "tool_setup.h"
+#include "loadid/setup.h"
 #include "traj_design.h"
 #include "traj_file.h"
 
@@ -115,7 +115,7 @@ int main(int argc, char **argv) {
 
     loadid_config_t cfg;
     loadid_chain_t chain;
-    if (loadid_tool_setup(prog, config_path, &cfg, &chain) != 0) return 1;
+    if (loadid_setup_load(prog, config_path, &cfg, &chain) != 0) return 1;
     if (seed >= 0) cfg.traj_seed = (uint64_t)seed;
     if (mc > 0) cfg.traj_monte_carlo = (int)mc;
     if (cand > 0) cfg.traj_candidates = (int)cand;
@@ -139,8 +139,9 @@ int main(int argc, char **argv) {
     make_limits(&cfg, &chain, &p.limits);
     const int n_params = cfg.offset_model_estimate ? LOADID_NPHI_OFFSET : LOADID_NPHI;
     loadid_est_config_default(LOADID_METHOD_RLS, n_params, &p.est);
-    if (loadid_est_weights_from_noise(&p.est, cfg.noise_force, cfg.noise_torque, cfg.noise_linear,
-                                      cfg.noise_angular, cfg.noise_omega, cfg.omega_typical) != 0) {
+    /* Column scaling by the JR3's noise levels (the sensor source's), as
+     * loadid-kappa --weighted reports it. */
+    if (loadid_setup_weights(&cfg, LOADID_SIGNALS_SENSOR, &p.est) != 0) {
         fprintf(stderr, "%s: noise levels must be finite and > 0\n", prog);
         return 1;
     }

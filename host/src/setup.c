@@ -1,0 +1,58 @@
+/* Settings derived from the configuration (setup.h). */
+#include "loadid/setup.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "loadid/urdf.h"
+
+static void warn(void *ctx, const char *msg) {
+    fprintf(stderr, "%s: warning: %s\n", (const char *)ctx, msg);
+}
+
+int loadid_setup_load(const char *prog, const char *config_path, loadid_config_t *cfg,
+                      loadid_chain_t *chain) {
+    char err[1024];
+    loadid_config_default(cfg);
+    if (config_path &&
+        loadid_config_load(config_path, cfg, err, sizeof err, warn, (void *)prog) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, err);
+        return 1;
+    }
+    if (loadid_urdf_load_file(cfg->robot_urdf, cfg->robot_base_link, cfg->robot_sensor_link, chain,
+                              err, sizeof err) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, err);
+        return 1;
+    }
+    return 0;
+}
+
+void loadid_setup_jr3(const loadid_config_t *cfg, loadid_jr3_config_t *jr3) {
+    memset(jr3, 0, sizeof *jr3);
+    jr3->base_id = cfg->can_base_id;
+    memcpy(jr3->full_scale[LOADID_JR3_FORCE], cfg->jr3_fs_force, sizeof cfg->jr3_fs_force);
+    memcpy(jr3->full_scale[LOADID_JR3_MOMENT], cfg->jr3_fs_moment, sizeof cfg->jr3_fs_moment);
+    memcpy(jr3->full_scale[LOADID_JR3_LINEAR], cfg->jr3_fs_linear, sizeof cfg->jr3_fs_linear);
+    memcpy(jr3->full_scale[LOADID_JR3_ANGULAR], cfg->jr3_fs_angular, sizeof cfg->jr3_fs_angular);
+}
+
+void loadid_setup_signals(const loadid_config_t *cfg, loadid_signal_source_t source,
+                          loadid_signals_config_t *out) {
+    loadid_signals_config_default(out);
+    out->source = source;
+    out->measured.jerk_psd = out->setpoint.jerk_psd = (loadid_real_t)cfg->kalman_jerk_psd;
+    out->measured.meas_sigma = out->setpoint.meas_sigma = (loadid_real_t)cfg->kalman_meas_sigma;
+    out->max_joint_age_us = (int64_t)llround(cfg->kalman_max_joint_age_s * 1e6);
+}
+
+int loadid_setup_weights(const loadid_config_t *cfg, loadid_signal_source_t source,
+                         loadid_est_config_t *est) {
+    const int jr3_spec = source == LOADID_SIGNALS_SENSOR || source == LOADID_SIGNALS_MIXED;
+    const int jr3_alpha = source == LOADID_SIGNALS_SENSOR;
+    return loadid_est_weights_from_noise(
+        est, (loadid_real_t)cfg->noise_force, (loadid_real_t)cfg->noise_torque,
+        (loadid_real_t)(jr3_spec ? cfg->noise_linear : cfg->kalman_spec_sigma),
+        (loadid_real_t)(jr3_alpha ? cfg->noise_angular : cfg->kalman_alpha_sigma),
+        (loadid_real_t)cfg->noise_omega, (loadid_real_t)cfg->omega_typical);
+}
