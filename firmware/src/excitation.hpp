@@ -34,7 +34,7 @@ public:
         W.col(N) = y;
         W = d_.asDiagonal() * W * t_.asDiagonal();
         gram_ = forgetting * gram_;
-        gram_.noalias() += W.transpose() * W;
+        gram_.noalias() += W.transpose().lazyProduct(W);
     }
 
     // kappa(D A_Xi T1) = sqrt(lambda_max / lambda_min of Upsilon); +Inf when

@@ -98,7 +98,7 @@ private:
         const Real lam = cfg.forgetting;
         const Eigen::Matrix<Real, N, 6> CtLi = C.transpose() * lambda_.cwiseInverse().asDiagonal();
         M_ = lam * M_;
-        M_.noalias() += CtLi * B;
+        M_.noalias() += CtLi.lazyProduct(B);
         b_ = lam * b_;
         b_.noalias() += CtLi * y;
         phi_ = M_.partialPivLu().solve(b_);

@@ -120,17 +120,17 @@ private:
 
     // Eqs. (25)-(35) for one block.
     void brand_update(const Block &Nk) {
-        Block L = U_.transpose() * Nk;  // eq. (27); rows >= r are 0
+        Block L = U_.transpose().lazyProduct(Nk);  // eq. (27); rows >= r are 0
         MatU basis = U_;                // [U_k J_k], eq. (34)
         linalg::Work Z = linalg::Work::Zero(N1, N1 + LOADID_NROWS);  // eq. (29), zero-padded
         int p = 0;
         if (rank_ < N1) {
             // Eq. (28): the part of N_k outside span(U), projected twice
             // (classical Gram-Schmidt with re-orthogonalisation).
-            Block H = Nk - U_ * L;
-            const Block L2 = U_.transpose() * H;
+            Block H = Nk - U_.lazyProduct(L);
+            const Block L2 = U_.transpose().lazyProduct(H);
             L += L2;
-            H -= U_ * L2;
+            H -= U_.lazyProduct(L2);
             // Eq. (31) asks whether the volume of H orthogonal to U is zero.
             // A rank-revealing QR answers it column by column: the leading p
             // columns with |G_ii| above the tolerance have non-zero volume
@@ -156,7 +156,7 @@ private:
         linalg::Values sz;
         linalg::svd_left(Z, Uz, sz);
         rank_ += p;
-        U_.noalias() = basis * Uz;  // eqs. (32) / (34)
+        U_.noalias() = basis.lazyProduct(Uz.template topLeftCorner<N1, N1>());  // eqs. (32) / (34)
         s_ = sz;                    // eqs. (33) / (35)
         if (rank_ < N1) {
             U_.rightCols(N1 - rank_).setZero();
@@ -177,7 +177,7 @@ private:
     }
 
     Real orthogonality_error() const {
-        MatU E = U_.transpose() * U_;
+        MatU E = U_.transpose().lazyProduct(U_);
         E.diagonal().head(rank_).array() -= Real(1);
         return E.norm();
     }
