@@ -27,6 +27,8 @@ DEBIAN_PACKAGES=(
   liblcm-dev liblcm-bin libglib2.0-dev can-utils
   # the configuration (YAML, libyaml) and the trajectory designer's optimiser (NLopt)
   libyaml-dev libnlopt-dev
+  # the serial F/T sensor: Modbus RTU (libmodbus)
+  libmodbus-dev
   # the LCM test's private network namespace (ip; unshare is in util-linux)
   iproute2
   # sd_notify for the systemd unit (Type=notify, WatchdogSec)

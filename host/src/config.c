@@ -63,6 +63,20 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->duration_s = 1.5;
     cfg->zeroing_window_s = 0.2;
 
+    cfg->sensor_type = LOADID_SENSOR_JR3;
+    snprintf(cfg->modbus_device, sizeof cfg->modbus_device, "/dev/ttyUSB0");
+    cfg->modbus_baud = 115200;
+    cfg->modbus_parity = 'N';
+    cfg->modbus_data_bits = 8;
+    cfg->modbus_stop_bits = 1;
+    cfg->modbus_slave_id = 1;
+    cfg->modbus_rate_hz = 200.0;
+    cfg->modbus_timeout_ms = 20;
+    for (int i = 0; i < 3; ++i) {
+        cfg->modbus_fs_force[i] = 200.0;
+        cfg->modbus_fs_moment[i] = 12.0;
+    }
+
     cfg->noise_force = 0.1;
     cfg->noise_torque = 0.005;
     cfg->noise_linear = 0.5;
@@ -414,6 +428,92 @@ fail:
     return -EINVAL;
 }
 
+/* The speeds libmodbus 3.1's RTU backend maps onto termios constants on
+ * Linux (modbus-rtu.c); it silently uses 9600 for any other. The same list
+ * as drivers/src/modbus_ft_rtu.c (loadid_modbus_ft_baud_supported; the
+ * Modbus test checks that both accept the same rates): this library does
+ * not link libmodbus. */
+static int baud_supported(int baud) {
+    static const int bauds[] = {110,     300,     600,     1200,    2400,    4800,
+                                9600,    19200,   38400,   57600,   115200,  230400,
+                                460800,  500000,  576000,  921600,  1000000, 1152000,
+                                1500000, 2000000, 2500000, 3000000, 3500000, 4000000};
+    for (size_t i = 0; i < sizeof bauds / sizeof bauds[0]; ++i)
+        if (bauds[i] == baud) return 1;
+    return 0;
+}
+
+/* sensor: and modbus:, after estimation: (signals is checked against the
+ * sensor type). */
+static int read_sensor_modbus(loadid_yaml_node_t *root, loadid_config_t *c) {
+    loadid_yaml_node_t *s = NULL, *fs = NULL, *n, *type = NULL;
+    char word[64];
+    TRY(read_section(root, "sensor", &s));
+    if ((type = loadid_yaml_get(s, "type"))) {
+        TRY(loadid_yaml_as_string(type, word, sizeof word));
+        if (!strcmp(word, "jr3"))
+            c->sensor_type = LOADID_SENSOR_JR3;
+        else if (!strcmp(word, "modbus"))
+            c->sensor_type = LOADID_SENSOR_MODBUS;
+        else
+            return loadid_yaml_fail(type, "unknown sensor type '%s' (jr3 or modbus)", word);
+    }
+    if (c->sensor_type == LOADID_SENSOR_MODBUS &&
+        (c->signals == LOADID_SIGNALS_SENSOR || c->signals == LOADID_SIGNALS_MIXED)) {
+        loadid_yaml_node_t *sig = NULL, *est = NULL;
+        if (loadid_yaml_get_mapping(root, "estimation", &est) >= 0 && est)
+            sig = loadid_yaml_get(est, "signals");
+        return loadid_yaml_fail(type,
+                                "a Modbus F/T sensor has no accelerometer: estimation.signals "
+                                "must be kf or setpoint, got %s%s",
+                                c->signals == LOADID_SIGNALS_SENSOR ? "sensor" : "mixed",
+                                sig ? "" : " (the default)");
+    }
+
+    TRY(read_section(root, "modbus", &s));
+    if ((n = loadid_yaml_get(s, "device"))) {
+        char dev[sizeof c->modbus_device];
+        TRY(loadid_yaml_as_string(n, dev, sizeof dev));
+        if (!dev[0]) return loadid_yaml_fail(n, "must not be empty");
+        memcpy(c->modbus_device, dev, sizeof dev);
+    }
+    if ((n = loadid_yaml_get(s, "baud"))) {
+        int baud;
+        TRY(loadid_yaml_as_int(n, &baud));
+        if (!baud_supported(baud))
+            return loadid_yaml_fail(n, "unsupported baud rate %d (one of 1200, 2400, 4800, 9600, "
+                                       "19200, 38400, 57600, 115200, 230400, 460800, 921600, ...)",
+                                    baud);
+        c->modbus_baud = baud;
+    }
+    if ((n = loadid_yaml_get(s, "parity"))) {
+        TRY(loadid_yaml_as_string(n, word, sizeof word));
+        if (!strcmp(word, "none"))
+            c->modbus_parity = 'N';
+        else if (!strcmp(word, "even"))
+            c->modbus_parity = 'E';
+        else if (!strcmp(word, "odd"))
+            c->modbus_parity = 'O';
+        else
+            return loadid_yaml_fail(n, "unknown parity '%s' (none, even or odd)", word);
+    }
+    TRY(read_int_range(s, "data_bits", &c->modbus_data_bits, 5, 8));
+    TRY(read_int_range(s, "stop_bits", &c->modbus_stop_bits, 1, 2));
+    TRY(read_int_range(s, "slave_id", &c->modbus_slave_id, 1, 247));
+    if ((n = loadid_yaml_get(s, "rate_hz"))) {
+        TRY(read_number(s, "rate_hz", &c->modbus_rate_hz, POSITIVE));
+        if (c->modbus_rate_hz > 1000)
+            return loadid_yaml_fail(n, "must be <= 1000 Hz, got %g", c->modbus_rate_hz);
+    }
+    TRY(read_int_range(s, "timeout_ms", &c->modbus_timeout_ms, 1, 60000));
+    TRY(read_section(s, "full_scale", &fs));
+    TRY(read_numbers(fs, "force", c->modbus_fs_force, 3, 3, NULL, POSITIVE));
+    TRY(read_numbers(fs, "moment", c->modbus_fs_moment, 3, 3, NULL, POSITIVE));
+    return 0;
+fail:
+    return -EINVAL;
+}
+
 static int read_trajectory(loadid_yaml_node_t *root, loadid_config_t *c) {
     loadid_yaml_node_t *s = NULL, *ws = NULL, *n;
     TRY(read_section(root, "trajectory", &s));
@@ -544,6 +644,7 @@ int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t
     TRY(read_robot(root, path, c));
     TRY(read_can_jr3_lcm(root, c));
     TRY(read_estimation(root, path, c));
+    TRY(read_sensor_modbus(root, c));
     TRY(read_trajectory(root, c));
     TRY(read_simulation(root, c));
     loadid_yaml_report_unused(doc, forward_warning, &sink);

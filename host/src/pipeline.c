@@ -44,6 +44,8 @@ struct loadid_pipeline {
     loadid_real_t phi_total[16];  /* primary's estimate with the distal part */
 
     int64_t frames_bad_extra, samples_used, estimator_errors;
+    /* loadid_pipeline_ft_sample (a sensor without accelerometer) */
+    int64_t ft_ok, ft_saturated, ft_faulty;
     /* Samples wait here until a joint state at or after their time has
      * arrived, so the joints are interpolated at the sample's time, not
      * extrapolated, and the result does not depend on which of the two
@@ -376,20 +378,64 @@ static void flush_pending(loadid_pipeline_t *p, int64_t before, int ready) {
     }
 }
 
+static void enqueue(loadid_pipeline_t *p, const loadid_jr3_sample_t *s);
+
 void loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame) {
     loadid_jr3_output_t out;
     const int rc = loadid_jr3_decoder_feed(p->jr3, frame, &out);
     if (rc == LOADID_JR3_SAMPLE) {
-        if (p->pending_count == PENDING_MAX) pop_pending(p); /* joints this late: serve it now */
-        p->pending[(p->pending_head + p->pending_count) % PENDING_MAX] = out.sample;
-        p->pending_count++;
-        flush_pending(p, INT64_MIN, 1);
+        enqueue(p, &out.sample);
     } else if (rc == LOADID_JR3_FULL_SCALE) {
         const loadid_jr3_full_scale_change_t *c = &out.full_scale;
         note(p, "JR3 %s full scale now %g %g %g (was %g %g %g)", loadid_jr3_group_name(c->group),
              c->current[0], c->current[1], c->current[2], c->previous[0], c->previous[1],
              c->previous[2]);
     }
+}
+
+/* A JR3 sample's queue slot, so that both sensors share one path. */
+static void enqueue(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
+    if (p->pending_count == PENDING_MAX) pop_pending(p); /* joints this late: serve it now */
+    p->pending[(p->pending_head + p->pending_count) % PENDING_MAX] = *s;
+    p->pending_count++;
+    flush_pending(p, INT64_MIN, 1);
+}
+
+void loadid_pipeline_ft_sample(loadid_pipeline_t *p, int64_t t_us, const double force[3],
+                               const double torque[3], int saturated, int faulty) {
+    if (!p) return;
+    if (faulty || saturated) {
+        /* Never fed (as the JR3's E_SATURATED / E_FAULT). */
+        p->ft_saturated += saturated != 0;
+        p->ft_faulty += faulty != 0;
+        return;
+    }
+    if (!force || !torque) {
+        p->frames_bad_extra++;
+        return;
+    }
+    if (p->cfg.signals == LOADID_SIGNALS_SENSOR || p->cfg.signals == LOADID_SIGNALS_MIXED) {
+        /* The source wants the JR3's accelerometer, which this sample does
+         * not have (config.c refuses sensor.type modbus with these). */
+        if (p->frames_bad_extra++ == 0)
+            note(p, "F/T sample without accelerometer refused: estimation.signals needs one");
+        return;
+    }
+    loadid_jr3_sample_t s;
+    memset(&s, 0, sizeof s);
+    for (int i = 0; i < 3; ++i) {
+        if (!isfinite(force[i]) || !isfinite(torque[i])) {
+            p->frames_bad_extra++;
+            return;
+        }
+        s.value[LOADID_JR3_FORCE][i] = force[i];
+        s.value[LOADID_JR3_MOMENT][i] = torque[i];
+        /* No accelerometer: LINEAR and ANGULAR stay 0 and the signal
+         * source (kf, setpoint) takes them from the joints. */
+    }
+    s.t_us = t_us;
+    p->ft_ok++;
+    enqueue(p, &s);
 }
 
 void loadid_pipeline_bad_frame(loadid_pipeline_t *p) { p->frames_bad_extra++; }
@@ -402,12 +448,12 @@ void loadid_pipeline_status(const loadid_pipeline_t *p, loadid_pipeline_status_t
     loadid_jr3_decoder_stats(p->jr3, &j);
     loadid_signals_stats_t s;
     loadid_signals_stats(p->sig, &s);
-    st->samples_ok = j.samples_ok;
+    st->samples_ok = j.samples_ok + p->ft_ok;
     st->samples_used = p->samples_used;
     st->frames_bad = j.frames_bad + p->frames_bad_extra;
     st->samples_incomplete = j.samples_incomplete;
-    st->samples_saturated = j.samples_saturated;
-    st->samples_faulty = j.samples_faulty;
+    st->samples_saturated = j.samples_saturated + p->ft_saturated;
+    st->samples_faulty = j.samples_faulty + p->ft_faulty;
     st->sequence_gaps = j.sequence_gaps;
     st->joint_msgs_bad = s.joint_msgs_bad;
     st->samples_stale = s.samples_stale + s.samples_no_joints;

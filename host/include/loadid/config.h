@@ -41,6 +41,9 @@ extern "C" {
 #define LOADID_PATH_MAX 4096
 #define LOADID_MAX_METHODS 5
 
+/* sensor.type */
+enum { LOADID_SENSOR_JR3 = 0, LOADID_SENSOR_MODBUS = 1 };
+
 typedef struct {
     /* robot: (DESIGN.md) */
     char robot_urdf[LOADID_PATH_MAX];   /* resolved path; default: the shipped
@@ -74,6 +77,28 @@ typedef struct {
 
     /* distal: */
     double distal_phi[10];              /* default 0 */
+
+    /* sensor: (loadid) the wrench source. type: LOADID_SENSOR_JR3 ("jr3",
+     * default: the JR3 on CAN, can.* and jr3.*) or LOADID_SENSOR_MODBUS
+     * ("modbus": a serial F/T sensor over Modbus RTU, modbus.*). A Modbus
+     * F/T has no accelerometer, so estimation.signals must then be kf or
+     * setpoint (an error otherwise). */
+    int sensor_type;
+
+    /* modbus: (loadid) the serial F/T sensor, proto/modbus_ft.md */
+    char modbus_device[256];            /* serial device, default /dev/ttyUSB0 */
+    int modbus_baud;                    /* bit/s, default 115200 (a rate
+                                           libmodbus maps on Linux) */
+    char modbus_parity;                 /* 'N' (default, "none"), 'E' ("even"),
+                                           'O' ("odd") */
+    int modbus_data_bits;               /* 5..8, default 8 */
+    int modbus_stop_bits;               /* 1..2, default 1 */
+    int modbus_slave_id;                /* 1..247, default 1 */
+    double modbus_rate_hz;              /* poll rate, (0, 1000], default 200 */
+    int modbus_timeout_ms;              /* response timeout, 1..60000, default 20 */
+    double modbus_fs_force[3];          /* full scales [N], default 200; the
+                                           sensor's holding registers override */
+    double modbus_fs_moment[3];         /* [N m], default 12; likewise */
 
     /* realtime: (loadid) the live service's scheduling. priority: SCHED_FIFO
      * priority 1..99, 0 (default) leaves the normal scheduler; lock_memory:

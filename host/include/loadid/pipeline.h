@@ -71,7 +71,8 @@ typedef struct {
 typedef struct {
     int state;
     char reason[192];             /* why FAILED, else "" */
-    int64_t samples_ok;           /* complete usable JR3 samples */
+    int64_t samples_ok;           /* complete usable JR3 samples, and usable
+                                     loadid_pipeline_ft_sample ones */
     int64_t samples_used;         /* fed to the estimators this run */
     int64_t frames_bad;           /* unknown id, wrong DLC, malformed, bad log line */
     int64_t samples_incomplete;
@@ -113,6 +114,17 @@ void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_jo
 void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
                              const char *load_name);
 void loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame);
+/* One already-decoded F/T sample from a sensor without an accelerometer
+ * (the Modbus F/T of drivers/modbus_ft.h): t_us its time [us, the clock of
+ * the joint states], force [N] and torque [N m] in S. It takes the JR3
+ * sample's path (the pending queue, zeroing, estimation, wrench_t) with
+ * a - g and alpha from the joints (estimation.signals kf or setpoint; with
+ * sensor or mixed every such sample is refused, counted in frames_bad and
+ * logged once). A saturated or faulty sample is counted
+ * in samples_saturated / samples_faulty and never fed; a non-finite value
+ * is counted in frames_bad. */
+void loadid_pipeline_ft_sample(loadid_pipeline_t *p, int64_t t_us, const double force[3],
+                               const double torque[3], int saturated, int faulty);
 /* A can.log line or socket read that was not a frame. */
 void loadid_pipeline_bad_frame(loadid_pipeline_t *p);
 /* Time passes without input: ends zeroing and estimation windows that
