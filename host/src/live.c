@@ -12,6 +12,19 @@
  * as wrench_t on LOADID_WRENCH. The loop time, the handling of each input
  * event (a CAN read, an LCM message, a tick), is kept in a histogram:
  * status_t's p50, p99 and max over the last second.
+ *
+ * After start-up (the first epoll_wait) the loop allocates nothing
+ * (STYLE.md rule 5; tests/python/test_live_no_alloc.py proves it under an
+ * allocation-counting LD_PRELOAD): messages are encoded and decoded by
+ * drivers/lcm_wire.h on static buffers, and on udpm:// (the provider in
+ * use) sent and received by drivers/lcm_udpm.h on the daemon's own two
+ * sockets: liblcm 1.3.1's receive thread allocates on the first message of
+ * every channel name it sees (the daemon's own output channels among them,
+ * mid-session) and its lcm_publish on its first message (a lazily made
+ * mutex), so liblcm is not used for udpm at all. Other providers
+ * (memq://, file://) fall back to liblcm: lcm_subscribe with raw handlers,
+ * lcm_handle and lcm_publish, not proven allocation-free. A finished
+ * estimate is saved without stdio (saved_result.c).
  */
 #define _GNU_SOURCE
 #include "live.h"
@@ -28,12 +41,10 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "lcmtypes/loadid_command_t.h"
-#include "lcmtypes/loadid_estimate_t.h"
-#include "lcmtypes/loadid_joint_state_t.h"
-#include "lcmtypes/loadid_status_t.h"
-#include "lcmtypes/loadid_wrench_t.h"
 #include "loadid/candump.h"
+#include "loadid/chain.h"
+#include "loadid/lcm_udpm.h"
+#include "loadid/lcm_wire.h"
 #include "loadid/pipeline.h"
 #include "loadid/socketcan.h"
 #include "realtime.h"
@@ -41,11 +52,23 @@
 
 #define HIST_BINS 20001 /* 0.5 us bins up to 10 ms; the last holds the rest */
 
+_Static_assert(LOADID_LCM_MAX_JOINTS == LOADID_MAX_JOINTS, "joint_state_t holds every joint");
+_Static_assert(LOADID_LCM_NAME_MAX == LOADID_LOAD_NAME_MAX, "load_name fits both ways");
+
+/* The loop's LCM buffers: one message out at a time, one datagram in
+ * (65536 holds any UDP datagram). */
+static uint8_t tx_buf[LOADID_LCM_ESTIMATE_MAX];
+static uint8_t rx_buf[65536];
+
 typedef struct {
     const loadid_config_t *cfg;
     const loadid_live_options_t *opt;
     loadid_pipeline_t *pipe;
-    lcm_t *lcm;
+    int udpm;                     /* udpm://: the daemon's own sockets; else liblcm */
+    loadid_lcm_udpm_tx_t lcm_tx;  /* udpm://: sending */
+    int lcm_rx_fd;                /* udpm://: receiving, or -1 */
+    lcm_t *lcm;                   /* other providers, else NULL */
+    double command_warned_us;     /* throttles the log line of a malformed command */
     int can_fd;                   /* SocketCAN, or -1 */
     FILE *can_file;
     loadid_candump_reader_t *can_reader;
@@ -75,15 +98,25 @@ static double mono_us(void) {
 
 /* ------------------------------------------------------------ outputs */
 
+/* n: what an encoder returned (it cannot fail on these buffers and
+ * fields; a failure would be a bug, logged). */
+static void publish(live_t *L, const char *channel, int n) {
+    if (n <= 0)
+        fprintf(stderr, "loadidd: %s: cannot encode: %s\n", channel, loadid_lcm_strerror(n));
+    else if (L->udpm) loadid_lcm_udpm_send(&L->lcm_tx, channel, tx_buf, (size_t)n);
+    else lcm_publish(L->lcm, channel, tx_buf, (unsigned)n);
+}
+
 static void on_estimate(void *ctx, const loadid_pipeline_estimate_t *e) {
     live_t *L = ctx;
-    loadid_estimate_t m;
+    loadid_lcm_estimate_t m;
     memset(&m, 0, sizeof m);
     m.utime = e->utime;
     m.samples = e->samples;
     m.method = (int8_t)e->method;
     m.state = (int8_t)e->state;
-    m.load_name = (char *)e->load_name;
+    memcpy(m.load_name, e->load_name, sizeof m.load_name);
+    m.load_name[sizeof m.load_name - 1] = 0;
     memcpy(m.phi, e->phi, sizeof m.phi);
     memcpy(m.offset, e->offset, sizeof m.offset);
     m.mass = e->mass;
@@ -92,16 +125,16 @@ static void on_estimate(void *ctx, const loadid_pipeline_estimate_t *e) {
     m.condition_number = e->condition_number;
     m.sigma_min = e->sigma_min;
     m.physically_consistent = (int8_t)e->physically_consistent;
-    loadid_estimate_t_publish(L->lcm, "LOADID_ESTIMATE", &m);
+    publish(L, "LOADID_ESTIMATE", loadid_lcm_encode_estimate(&m, tx_buf, sizeof tx_buf));
 }
 
 static void on_wrench(void *ctx, int64_t utime, const double f[3], const double t[3]) {
     live_t *L = ctx;
-    loadid_wrench_t m;
+    loadid_lcm_wrench_t m;
     m.utime = utime;
     memcpy(m.force, f, sizeof m.force);
     memcpy(m.torque, t, sizeof m.torque);
-    loadid_wrench_t_publish(L->lcm, "LOADID_WRENCH", &m);
+    publish(L, "LOADID_WRENCH", loadid_lcm_encode_wrench(&m, tx_buf, sizeof tx_buf));
 }
 
 static void on_state(void *ctx, int64_t utime, int state, const char *reason) {
@@ -143,7 +176,7 @@ static void loop_stats(live_t *L, double *p50, double *p99, double *max) {
 static void publish_status(live_t *L) {
     loadid_pipeline_status_t st;
     loadid_pipeline_status(L->pipe, &st);
-    loadid_status_t m;
+    loadid_lcm_status_t m;
     memset(&m, 0, sizeof m);
     m.utime = wall_us();
     m.state = (int8_t)st.state;
@@ -156,28 +189,67 @@ static void publish_status(live_t *L) {
     m.sequence_gaps = st.sequence_gaps;
     m.joint_msgs_bad = st.joint_msgs_bad;
     loop_stats(L, &m.loop_us_p50, &m.loop_us_p99, &m.loop_us_max);
-    loadid_status_t_publish(L->lcm, "LOADID_STATUS", &m);
+    publish(L, "LOADID_STATUS", loadid_lcm_encode_status(&m, tx_buf, sizeof tx_buf));
 }
 
 /* ------------------------------------------------------------- inputs */
 
-static void on_joints(const lcm_recv_buf_t *rbuf, const char *channel,
-                      const loadid_joint_state_t *msg, void *ctx) {
-    (void)rbuf, (void)channel;
-    live_t *L = ctx;
-    loadid_pipeline_joint_state(L->pipe, msg->utime, msg->num_joints, msg->position,
-                                msg->setpoint);
+/* A malformed joint state is counted with the refused ones
+ * (status_t.joint_msgs_bad); NaN and infinities go on, for the pipeline
+ * counts them. */
+static void on_joints(live_t *L, const uint8_t *data, size_t len) {
+    static loadid_lcm_joint_state_t m; /* two arrays of 16 doubles: off the stack */
+    if (loadid_lcm_decode_joint_state(data, len, &m) < 0)
+        loadid_pipeline_joint_state(L->pipe, wall_us(), 0, NULL, NULL);
+    else
+        loadid_pipeline_joint_state(L->pipe, m.utime, m.num_joints, m.position, m.setpoint);
 }
 
-static void on_command(const lcm_recv_buf_t *rbuf, const char *channel,
-                       const loadid_command_t *msg, void *ctx) {
-    (void)rbuf, (void)channel;
-    live_t *L = ctx;
+static void on_command(live_t *L, const uint8_t *data, size_t len) {
+    loadid_lcm_command_t m;
+    const int rc = loadid_lcm_decode_command(data, len, &m);
+    if (rc < 0) {
+        const double now_mono = mono_us();
+        if (now_mono - L->command_warned_us > 1e6) { /* at most one line a second */
+            fprintf(stderr, "loadidd: LOADID_COMMAND: %s; ignored\n", loadid_lcm_strerror(rc));
+            L->command_warned_us = now_mono;
+        }
+        return;
+    }
     /* A command acts at its own utime, as in a recording, unless that is
      * more than a second away from now (a sender's clock off): then now. */
     const int64_t now = wall_us();
-    const int64_t t = msg->utime > now - 1000000 && msg->utime < now + 1000000 ? msg->utime : now;
-    loadid_pipeline_command(L->pipe, t, msg->action, msg->load_name);
+    const int64_t t = m.utime > now - 1000000 && m.utime < now + 1000000 ? m.utime : now;
+    loadid_pipeline_command(L->pipe, t, m.action, m.load_name);
+}
+
+/* One LCM message; other channels (the daemon's own output, looped back
+ * by multicast, and anyone else's) are ignored. Returns 1 when it was an
+ * input. */
+static int on_message(live_t *L, const char *channel, const uint8_t *data, size_t len) {
+    if (strcmp(channel, "LOADID_JOINTS") == 0) on_joints(L, data, len);
+    else if (strcmp(channel, "LOADID_COMMAND") == 0) on_command(L, data, len);
+    else return 0;
+    return 1;
+}
+
+/* udpm://: one datagram per event (as lcm_handle dispatched one message);
+ * epoll is level-triggered, so the next comes with the next wait. Returns
+ * 1 for an input: what else arrives (above all the daemon's own output,
+ * which liblcm's receive thread dropped before the loop saw it) is not a
+ * loop event in status_t's loop times. */
+static int read_lcm(live_t *L) {
+    const int n = loadid_lcm_udpm_read(L->lcm_rx_fd, rx_buf, sizeof rx_buf);
+    const char *channel;
+    const uint8_t *data;
+    size_t len;
+    return n > 0 && loadid_lcm_udpm_parse(rx_buf, (size_t)n, &channel, &data, &len) == 0 &&
+           on_message(L, channel, data, len);
+}
+
+/* Other providers: liblcm's raw subscription. */
+static void on_lcm_raw(const lcm_recv_buf_t *rbuf, const char *channel, void *ctx) {
+    (void)on_message(ctx, channel, rbuf->data, rbuf->data_size);
 }
 
 /* The loop time: handling one input event (a CAN read, an LCM message,
@@ -227,6 +299,12 @@ static void read_file(live_t *L, int timer_fd) {
     timerfd_settime(timer_fd, TFD_TIMER_ABSTIME, &its, NULL);
 }
 
+static void close_lcm(live_t *L) {
+    if (L->lcm_rx_fd >= 0) close(L->lcm_rx_fd);
+    loadid_lcm_udpm_close_tx(&L->lcm_tx);
+    if (L->lcm) lcm_destroy(L->lcm);
+}
+
 static int add_fd(int ep, int fd, uint32_t tag) {
     struct epoll_event ev = {.events = EPOLLIN, .data.u32 = tag};
     return epoll_ctl(ep, EPOLL_CTL_ADD, fd, &ev);
@@ -255,6 +333,8 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     L.cfg = cfg;
     L.opt = opt;
     L.can_fd = -1;
+    L.lcm_rx_fd = -1;
+    L.lcm_tx.fd = -1;
     char err[512];
     loadid_pipeline_sink_t sink = {.ctx = &L, .estimate = on_estimate, .wrench = on_wrench,
                                    .state = on_state, .log = on_log};
@@ -262,8 +342,25 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         fprintf(stderr, "loadidd: %s\n", err);
         return 1;
     }
-    L.lcm = lcm_create(cfg->lcm_url);
-    if (!L.lcm) {
+    /* An empty lcm.url is liblcm's: LCM_DEFAULT_URL, else its default. */
+    const char *url = cfg->lcm_url[0] ? cfg->lcm_url : getenv("LCM_DEFAULT_URL");
+    loadid_lcm_udpm_url_t udpm;
+    const int udpm_rc = loadid_lcm_udpm_parse_url(url, &udpm);
+    if (udpm_rc == -EINVAL) {
+        fprintf(stderr, "loadidd: cannot open LCM at %s: malformed udpm URL\n", url);
+        loadid_pipeline_destroy(L.pipe);
+        return 1;
+    }
+    L.udpm = udpm_rc == 0;
+    if (L.udpm) {
+        L.lcm_rx_fd = loadid_lcm_udpm_open(&udpm, err, sizeof err);
+        if (L.lcm_rx_fd < 0 || loadid_lcm_udpm_open_tx(&udpm, &L.lcm_tx, err, sizeof err) != 0) {
+            fprintf(stderr, "loadidd: cannot open LCM at %s: %s\n", url ? url : "", err);
+            if (L.lcm_rx_fd >= 0) close(L.lcm_rx_fd);
+            loadid_pipeline_destroy(L.pipe);
+            return 1;
+        }
+    } else if (!(L.lcm = lcm_create(cfg->lcm_url))) {
         fprintf(stderr, "loadidd: cannot open LCM at %s\n", cfg->lcm_url);
         loadid_pipeline_destroy(L.pipe);
         return 1;
@@ -280,14 +377,18 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         }
         if (lr != 0) {
             fprintf(stderr, "loadidd: results.load: %s\n", lerr);
-            lcm_destroy(L.lcm);
+            close_lcm(&L);
             loadid_pipeline_destroy(L.pipe);
             return 1;
         }
         fprintf(stderr, "loadidd: loaded %s (%s): wrench_t flows\n", cfg->results_load, e.load_name);
     }
-    loadid_joint_state_t_subscribe(L.lcm, "LOADID_JOINTS", on_joints, &L);
-    loadid_command_t_subscribe(L.lcm, "LOADID_COMMAND", on_command, &L);
+    int lcm_fd = L.lcm_rx_fd;
+    if (!L.udpm) {
+        lcm_subscribe(L.lcm, "LOADID_JOINTS", on_lcm_raw, &L);
+        lcm_subscribe(L.lcm, "LOADID_COMMAND", on_lcm_raw, &L);
+        lcm_fd = lcm_get_fileno(L.lcm);
+    }
 
     sigset_t mask;
     sigemptyset(&mask);
@@ -302,7 +403,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     int rc = 0;
     if (sig_fd < 0 || tick_fd < 0 || file_fd < 0 || ep < 0 ||
         timerfd_settime(tick_fd, 0, &tick, NULL) != 0 || add_fd(ep, sig_fd, TAG_SIGNAL) ||
-        add_fd(ep, tick_fd, TAG_TICK) || add_fd(ep, lcm_get_fileno(L.lcm), TAG_LCM)) {
+        add_fd(ep, tick_fd, TAG_TICK) || add_fd(ep, lcm_fd, TAG_LCM)) {
         fprintf(stderr, "loadidd: cannot set up the event loop: %s\n", strerror(errno));
         rc = 1;
     }
@@ -351,8 +452,12 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         for (int i = 0; i < n; ++i) {
             uint64_t v;
             const double t_event = mono_us();
+            int timed = evs[i].data.u32 != TAG_SIGNAL;
             switch (evs[i].data.u32) {
-                case TAG_LCM: lcm_handle(L.lcm); break;
+                case TAG_LCM:
+                    if (L.udpm) timed = read_lcm(&L);
+                    else lcm_handle(L.lcm);
+                    break;
                 case TAG_CAN: read_socket(&L); break;
                 case TAG_FILE:
                     if (read(file_fd, &v, sizeof v) < 0) break;
@@ -373,7 +478,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     break;
                 case TAG_SIGNAL: stop = 1; break;
             }
-            if (evs[i].data.u32 != TAG_SIGNAL) record_loop_time(&L, mono_us() - t_event);
+            if (timed) record_loop_time(&L, mono_us() - t_event);
         }
         if (L.done_pending) save_done(&L);
         if (stop) break;
@@ -397,7 +502,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     loadid_candump_reader_close(L.can_reader);
     if (L.can_file) fclose(L.can_file);
     close(ep), close(file_fd), close(tick_fd), close(sig_fd);
-    lcm_destroy(L.lcm);
+    close_lcm(&L);
     loadid_pipeline_destroy(L.pipe);
     return rc;
 }

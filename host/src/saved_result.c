@@ -3,55 +3,90 @@
 #include "saved_result.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "loadid/core.h"
 #include "loadid/yaml_tree.h"
 
-static void list(FILE *f, const double *v, int n) {
-    fputc('[', f);
-    for (int i = 0; i < n; ++i) fprintf(f, "%s%.17g", i ? ", " : "", v[i]);
-    fputc(']', f);
+/* The writer allocates nothing (it runs in loadidd's loop when an
+ * estimation ends): the document is formatted into a fixed buffer with
+ * snprintf and written with open, write and rename, no stdio streams. */
+
+typedef struct {
+    char *p;
+    size_t cap, n;
+    int over; /* the document did not fit */
+} doc_t;
+
+__attribute__((format(printf, 2, 3))) static void add(doc_t *d, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    const int k = d->over ? 0 : vsnprintf(d->p + d->n, d->cap - d->n, fmt, ap);
+    va_end(ap);
+    if (k < 0 || (size_t)k >= d->cap - d->n) d->over = 1;
+    else d->n += (size_t)k;
 }
 
-static int write_one(const char *path, const loadid_pipeline_estimate_t *e,
-                     const loadid_pipeline_compensation_t *c) {
-    FILE *f = fopen(path, "w");
-    if (!f) return -errno;
-    fprintf(f, "# A load estimated by loadidd (Kubus et al. 2008); inertia about the COM, axes\n"
-               "# of the sensor frame S. compensation: what wrench_t needs after a restart.\n");
-    fprintf(f, "format: loadid-estimate-1\nmethod: %s\nload_name: \"",
-            loadid_method_name((loadid_method_t)e->method));
+static void list(doc_t *d, const double *v, int n) {
+    add(d, "[");
+    for (int i = 0; i < n; ++i) add(d, "%s%.17g", i ? ", " : "", v[i]);
+    add(d, "]");
+}
+
+static void format_doc(doc_t *d, const loadid_pipeline_estimate_t *e,
+                   const loadid_pipeline_compensation_t *c) {
+    add(d, "# A load estimated by loadidd (Kubus et al. 2008); inertia about the COM, axes\n"
+           "# of the sensor frame S. compensation: what wrench_t needs after a restart.\n");
+    add(d, "format: loadid-estimate-1\nmethod: %s\nload_name: \"",
+        loadid_method_name((loadid_method_t)e->method));
     for (const char *s = e->load_name; *s; ++s)
-        if (*s != '"' && *s != '\\' && (unsigned char)*s >= 0x20) fputc(*s, f);
-    fprintf(f, "\"\nutime: %lld\nsamples: %lld\nphi: ", (long long)e->utime, (long long)e->samples);
-    list(f, e->phi, 10);
-    fprintf(f, "\noffset: ");
-    list(f, e->offset, 6);
-    fprintf(f, "\nmass: %.17g\ncom: ", e->mass);
-    list(f, e->com, 3);
-    fprintf(f, "\ninertia_com: ");
-    list(f, e->inertia_com, 6);
-    fprintf(f, "\ncondition_number: %.17g\nphysically_consistent: %s\n", e->condition_number,
-            e->physically_consistent ? "true" : "false");
-    fprintf(f, "compensation:\n  n_params: %d\n  phi_total: ", c->n_params);
-    list(f, c->phi_total, c->n_params);
-    fprintf(f, "\n  zeroed: %s\n  y0: ", c->zeroed ? "true" : "false");
-    list(f, c->y0, 6);
-    fprintf(f, "\n  g_init: ");
-    list(f, c->g_init, 3);
+        if (*s != '"' && *s != '\\' && (unsigned char)*s >= 0x20) add(d, "%c", *s);
+    add(d, "\"\nutime: %lld\nsamples: %lld\nphi: ", (long long)e->utime, (long long)e->samples);
+    list(d, e->phi, 10);
+    add(d, "\noffset: ");
+    list(d, e->offset, 6);
+    add(d, "\nmass: %.17g\ncom: ", e->mass);
+    list(d, e->com, 3);
+    add(d, "\ninertia_com: ");
+    list(d, e->inertia_com, 6);
+    add(d, "\ncondition_number: %.17g\nphysically_consistent: %s\n", e->condition_number,
+        e->physically_consistent ? "true" : "false");
+    add(d, "compensation:\n  n_params: %d\n  phi_total: ", c->n_params);
+    list(d, c->phi_total, c->n_params);
+    add(d, "\n  zeroed: %s\n  y0: ", c->zeroed ? "true" : "false");
+    list(d, c->y0, 6);
+    add(d, "\n  g_init: ");
+    list(d, c->g_init, 3);
     /* URDF <inertial>: origin at the COM, inertia about it in S's axes. */
-    fprintf(f, "\nurdf_inertial: |\n  <inertial>\n"
-               "    <origin xyz=\"%.9g %.9g %.9g\" rpy=\"0 0 0\"/>\n    <mass value=\"%.9g\"/>\n"
-               "    <inertia ixx=\"%.9g\" ixy=\"%.9g\" ixz=\"%.9g\" iyy=\"%.9g\" iyz=\"%.9g\" "
-               "izz=\"%.9g\"/>\n  </inertial>\n",
-            e->com[0], e->com[1], e->com[2], e->mass, e->inertia_com[0], e->inertia_com[1],
-            e->inertia_com[2], e->inertia_com[3], e->inertia_com[4], e->inertia_com[5]);
-    int rc = ferror(f) ? -EIO : 0;
-    if (fclose(f) != 0 && !rc) rc = -errno;
+    add(d, "\nurdf_inertial: |\n  <inertial>\n"
+           "    <origin xyz=\"%.9g %.9g %.9g\" rpy=\"0 0 0\"/>\n    <mass value=\"%.9g\"/>\n"
+           "    <inertia ixx=\"%.9g\" ixy=\"%.9g\" ixz=\"%.9g\" iyy=\"%.9g\" iyz=\"%.9g\" "
+           "izz=\"%.9g\"/>\n  </inertial>\n",
+        e->com[0], e->com[1], e->com[2], e->mass, e->inertia_com[0], e->inertia_com[1],
+        e->inertia_com[2], e->inertia_com[3], e->inertia_com[4], e->inertia_com[5]);
+}
+
+/* path.tmp, then renamed over path: a reader never sees half a file. */
+static int write_one(const char *path, const char *text, size_t n) {
+    char tmp[4400];
+    if ((size_t)snprintf(tmp, sizeof tmp, "%s.tmp", path) >= sizeof tmp) return -ENAMETOOLONG;
+    const int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd < 0) return -errno;
+    int rc = 0;
+    for (size_t done = 0; done < n && !rc;) {
+        const ssize_t w = write(fd, text + done, n - done);
+        if (w < 0 && errno != EINTR) rc = -errno;
+        else if (w > 0) done += (size_t)w;
+    }
+    if (close(fd) != 0 && !rc) rc = -errno;
+    if (!rc && rename(tmp, path) != 0) rc = -errno;
+    if (rc) unlink(tmp);
     return rc;
 }
 
@@ -70,8 +105,12 @@ int loadid_saved_result_write(const char *dir, const loadid_pipeline_estimate_t 
     safe[k] = 0;
     snprintf(name, sizeof name, "%s/%s-%lld.yaml", dir, k ? safe : "load", (long long)est->utime);
     snprintf(latest, sizeof latest, "%s/latest.yaml", dir);
-    int rc = write_one(name, est, comp);
-    if (rc == 0) rc = write_one(latest, est, comp);
+    char text[8192]; /* about 2.5 kB: 54 numbers of up to 24 characters, the name, the text */
+    doc_t d = {text, sizeof text, 0, 0};
+    format_doc(&d, est, comp);
+    int rc = d.over ? -EOVERFLOW : 0;
+    if (rc == 0) rc = write_one(name, text, d.n);
+    if (rc == 0) rc = write_one(latest, text, d.n);
     if (rc != 0) snprintf(err, errlen, "%s: cannot write: %s", name, strerror(-rc));
     else if (path) snprintf(path, pathlen, "%s", name);
     return rc;

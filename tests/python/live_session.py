@@ -9,6 +9,8 @@ publishes the recording's joint states and commands on LCM at the same
 times, and prints as JSON what came back on LOADID_ESTIMATE, LOADID_STATUS
 and LOADID_WRENCH; then asks the CLI for the status, resets the daemon
 through the CLI, asks again, and stops the daemon with SIGTERM.
+LOADID_DAEMON_PRELOAD in the environment is the daemon's LD_PRELOAD (only
+the daemon's).
 """
 
 from __future__ import annotations
@@ -46,8 +48,15 @@ def main():
     lc = lcm.LCM(URL)
     got = {"estimate": [], "status": [], "wrench": []}
 
+    reencoded_differ = []  # messages whose lcm-gen re-encoding differs from the bytes received
+
     def keep(kind, cls):
-        return lambda ch, data: got[kind].append(cls.decode(data))
+        def handler(ch, data):
+            m = cls.decode(data)
+            if m.encode() != data:
+                reencoded_differ.append(ch)
+            got[kind].append(m)
+        return handler
 
     lc.subscribe("LOADID_ESTIMATE", keep("estimate", loadid.estimate_t))
     lc.subscribe("LOADID_STATUS", keep("status", loadid.status_t))
@@ -59,6 +68,10 @@ def main():
     notify.bind(notify_path)
     notify.setblocking(False)
     env = dict(os.environ, NOTIFY_SOCKET=notify_path, WATCHDOG_USEC="200000")
+    # test_live_no_alloc.py: the allocation counter, preloaded into the
+    # daemon only (it writes its report to LOADID_ALLOC_REPORT at exit).
+    if os.environ.get("LOADID_DAEMON_PRELOAD"):
+        env["LD_PRELOAD"] = os.environ["LOADID_DAEMON_PRELOAD"]
 
     epoch = int(time.time() * 1e6) + 1_500_000
     daemon = subprocess.Popen([loadidd, "--config", config, "--can-file", f"{rec}/can.log",
@@ -136,7 +149,7 @@ def main():
 
     print(json.dumps({
         "returncode": daemon.returncode, "stderr": err, "cli": cli_log, "notify": notes,
-        "sched": sched, "memory_kb": memory,
+        "sched": sched, "memory_kb": memory, "reencoded_differ": len(reencoded_differ),
         "estimate": [est(m) for m in got["estimate"]],
         "status": [{"state": m.state, "samples_ok": m.samples_ok, "frames_bad": m.frames_bad,
                     "samples_incomplete": m.samples_incomplete,

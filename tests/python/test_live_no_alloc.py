@@ -1,0 +1,91 @@
+"""The daemon's loop allocates nothing after start-up (STYLE.md rule 5),
+proved on the real loadidd in a whole live session over real LCM (UDP
+multicast in a private network namespace, live_session.py): joint states
+and commands over LCM, JR3 frames from --can-file, ZERO, 1.5 s of
+estimation, DONE, estimate_t, wrench_t and status_t going out, the finished
+estimate saved to results.directory, the CLI's status and reset, SIGTERM.
+
+The daemon runs with liballoc_count.so preloaded (tests/support/
+alloc_count.c): it counts malloc, calloc, realloc, free, posix_memalign,
+aligned_alloc, memalign, valloc and pvalloc in every thread (liblcm's
+receive thread too) between the daemon's first epoll_wait (start-up over)
+and the return of its last one (SIGTERM: shutdown), and writes the counts
+and the allocating call sites at exit. Not under the sanitizers (their
+allocator), as test_no_alloc.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+
+import pytest
+
+from recordings import program
+from test_live_lcm import run_session
+
+
+@pytest.fixture(scope="module")
+def session(recording, tmp_path_factory):
+    lib = os.environ.get("LOADID_ALLOC_COUNT_LIB")
+    if not lib or not os.path.isfile(lib):
+        pytest.fail("LOADID_ALLOC_COUNT_LIB must name liballoc_count.so (ctest sets it)")
+    d = tmp_path_factory.mktemp("live_no_alloc")
+    report = d / "alloc.txt"
+    cfg = d / "c.yaml"
+    cfg.write_text("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n"
+                   f"results:\n  directory: {d / 'results'}\n"
+                   "realtime:\n  priority: 10\n  lock_memory: true\n  cpu: 0\n")
+    os.environ["LOADID_DAEMON_PRELOAD"] = lib
+    os.environ["LOADID_ALLOC_REPORT"] = str(report)
+    try:
+        out = run_session(cfg, recording)
+    finally:
+        del os.environ["LOADID_DAEMON_PRELOAD"], os.environ["LOADID_ALLOC_REPORT"]
+    out["results"] = d / "results"
+    out["report"] = report.read_text() if report.exists() else ""
+    return out
+
+
+def counts(report: str) -> dict:
+    return {k: int(v) for k, v in (l.split()[:2] for l in report.splitlines()
+                                   if not l.startswith("site"))}
+
+
+def test_session_went_through_every_path(session):
+    """What the window covered: the daemon ran the whole session."""
+    assert session["returncode"] == 0, session["stderr"]
+    est = session["estimate"]
+    assert [e for e in est if e["state"] == 2] and len([e for e in est if e["state"] == 3]) == 3
+    assert len(session["wrench"]) > 500
+    assert len(session["status"]) >= 3 and session["status"][-1]["state"] == 0  # reset by the CLI
+    assert "saved " in session["stderr"] and (session["results"] / "latest.yaml").exists()
+    c = counts(session["report"])
+    assert c["epoll_waits"] > 3000, session["report"]  # about one per joint state and frame batch
+    # What the daemon published is byte for byte what lcm-gen makes of it.
+    assert session["reencoded_differ"] == 0
+
+
+def resolve(site: str) -> str:
+    """loadidd's frames as function (file:line), by addr2line (the
+    preloaded library's dladdr sees only exported symbols)."""
+    exe = program("LOADIDD_EXE")
+
+    def one(m):
+        if not shutil.which("addr2line"):
+            return m.group(0)
+        r = subprocess.run(["addr2line", "-f", "-i", "-s", "-e", exe, m.group(1)],
+                           capture_output=True, text=True)
+        lines = r.stdout.split()
+        return " < ".join(f"{f} ({w})" for f, w in zip(lines[::2], lines[1::2])) or m.group(0)
+
+    return re.sub(r"loadidd\+(0x[0-9a-f]+)\(\?\)", one, site)
+
+
+def test_no_allocation_between_start_up_and_shutdown(session):
+    c = counts(session["report"])
+    sites = [resolve(l) for l in session["report"].splitlines()
+             if l.startswith("site") and not l.startswith("site loop 0 ")]
+    assert c["loop_allocations"] == 0, "allocations in the loop:\n" + "\n".join(sites)
