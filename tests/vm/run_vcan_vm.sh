@@ -5,12 +5,20 @@
 # the can, can-raw, can-dev and vcan modules, vcan0 up, a multicast route on
 # lo for LCM; canplayer (can-utils) puts can.log on vcan0 while candump
 # counts the frames; then loadidd runs live on vcan0 and LCM while
-# loadid-replay puts the recording on both; the saved estimate and the
-# verdict are printed on the serial console, which this script prints.
+# loadid-replay puts the recording on both; loadid-record records a second
+# replay of it (sent back as a base64 tar). Then fault injection: loadidd
+# live on the hand-made parts in FAULTS_DIR (tests/vm/fault_session.py),
+# `loadid zero`, `start` and `stop` between them, vcan0 removed and added
+# again before the last part; `loadid status` and estimate_watch read back
+# what the daemon counted and estimated. Last, loadidd's refusal of a bad
+# configuration and of a missing interface. Everything is printed on the
+# serial console between LOADID-* markers; this script prints the console
+# and test_vcan_vm.py judges it.
 #
 # Usage: run_vcan_vm.sh WORKDIR LOADIDD LOADID_REPLAY RECORDING_DIR URDF
+#                       LOADID_CLI LOADID_RECORD ESTIMATE_WATCH FAULTS_DIR
 set -eu
-work=$1 loadidd=$2 replay=$3 rec=$4 urdf=$5
+work=$1 loadidd=$2 replay=$3 rec=$4 urdf=$5 cli=$6 record=$7 watch=$8 faults=$9
 mkdir -p "$work"
 cd "$work"
 
@@ -36,7 +44,7 @@ rm -rf "$root"
 mkdir -p "$root/bin" "$root/lib/modules" "$root/data" "$root/proc" "$root/sys" "$root/dev" \
          "$root/tmp" "$root/results"
 cp /bin/busybox "$root/bin/busybox"
-for a in sh mount insmod sleep cat echo kill poweroff wc ls grep; do ln -s busybox "$root/bin/$a"; done
+for a in sh mount insmod sleep cat echo kill poweroff wc ls grep tar gzip base64 taskset; do ln -s busybox "$root/bin/$a"; done
 for m in net/can/can.ko net/can/can-raw.ko drivers/net/can/dev/can-dev.ko drivers/net/can/vcan.ko; do
     cp "$mods/$m" "$root/lib/modules/"
 done
@@ -49,7 +57,7 @@ copy_prog() {
         cp -L "$lib" "$root$lib"
     done
 }
-for p in "$loadidd" "$replay" "$(command -v ip)" "$(command -v canplayer)" "$(command -v candump)"; do
+for p in "$loadidd" "$replay" "$cli" "$record" "$watch" "$(command -v ip)" "$(command -v canplayer)" "$(command -v candump)"; do
     copy_prog "$p"
 done
 mkdir -p "$root/lib64"
@@ -57,6 +65,10 @@ cp -L /lib64/ld-linux-x86-64.so.2 "$root/lib64/"
 
 cp "$rec/can.log" "$rec/lcm.log" "$root/data/"
 cp "$urdf" "$root/data/robot.urdf"
+mkdir -p "$root/data/faults"
+cp -r "$faults"/* "$root/data/faults/"
+printf 'robot: [not, a, mapping]\n' > "$root/data/bad.yaml"
+printf 'robot:\n  urdf: robot.urdf\ncan:\n  interface: nosuch0\n' > "$root/data/nosuch.yaml"
 cat > "$root/data/loadid.yaml" <<'YAML'
 robot:
   urdf: robot.urdf
@@ -82,12 +94,17 @@ ip route add 224.0.0.0/4 dev lo
 ip link add dev vcan0 type vcan
 ip link set vcan0 up
 cd /data
+# Senders stay on one CPU: vcan and lo hand each frame or datagram to the
+# backlog of the CPU that sent it, so a sender migrating between the two
+# CPUs reorders what every socket receives (seen: whole JR3 samples and
+# joint states out of order, counted as gaps and bad messages).
+pin="taskset 0x2"
 # canplayer's syntax: every line of can.log reaches vcan0.
 lines=$(wc -l < can.log)
 candump -r 4194304 -L vcan0 > /tmp/dump.log &
 dumper=$!
 sleep 0.5
-canplayer -I can.log
+$pin canplayer -I can.log
 sleep 0.5
 kill $dumper
 echo "LOADID-CANPLAYER lines $lines received $(wc -l < /tmp/dump.log)"
@@ -95,7 +112,7 @@ echo "LOADID-CANPLAYER lines $lines received $(wc -l < /tmp/dump.log)"
 loadidd --config /data/loadid.yaml --verbose 2> /tmp/loadidd.err &
 daemon=$!
 sleep 1
-loadid-replay --interface vcan0 /data
+$pin loadid-replay --interface vcan0 /data
 sleep 2
 kill -TERM $daemon
 sleep 1
@@ -103,6 +120,65 @@ cat /tmp/loadidd.err
 echo "LOADID-RESULT-BEGIN"
 cat /results/latest.yaml
 echo "LOADID-RESULT-END"
+# loadid-record records the same replay (alone: beside the daemon, the two
+# emulated CPUs fell behind the replay's clock).
+loadid-record --config /data/loadid.yaml --out /tmp/recorded 2> /tmp/record.err &
+recorder=$!
+sleep 0.5
+$pin loadid-replay --interface vcan0 /data
+sleep 0.5
+kill -TERM $recorder
+wait $recorder && echo "LOADID-RECORD-EXIT 0" || echo "LOADID-RECORD-EXIT $?"
+cat /tmp/record.err
+echo "LOADID-RECORDING-BEGIN"
+tar -C /tmp -cf - recorded | gzip -1 | base64
+echo "LOADID-RECORDING-END"
+
+# Fault injection: the hand-made parts of tests/vm/fault_session.py, with
+# the CLI's commands between them (each after the daemon has read the part
+# before), then vcan0 removed and added again while loadidd runs.
+cd /data/faults
+loadidd --config faults.yaml --verbose 2> /tmp/faults.err &
+daemon=$!
+estimate_watch > /tmp/estimates.txt &
+watcher=$!
+sleep 1
+for step in "idle zero" "zeroing start" "window stop" "done -"; do
+    set -- $step
+    $pin loadid-replay --interface vcan0 $1
+    sleep 0.3
+    [ "$2" = - ] || loadid --config faults.yaml $2 --load-name faults
+done
+sleep 0.5
+ip link del dev vcan0
+sleep 1.5
+ip link add dev vcan0 type vcan && ip link set vcan0 up
+# Meanwhile loadid-record --duration, every channel: the daemon's status_t.
+loadid-record --all-channels --duration 1.5 --out /tmp/short 2> /tmp/short.err &
+short=$!
+sleep 2.5  # the daemon retries once a second
+wait $short && echo "LOADID-SHORT-EXIT 0" || echo "LOADID-SHORT-EXIT $?"
+$pin loadid-replay --interface vcan0 again
+sleep 1
+echo "LOADID-STATUS-BEGIN"
+loadid --config faults.yaml status --timeout 3 || echo "LOADID-VERDICT fail loadid status"
+echo "LOADID-STATUS-END"
+kill -0 $daemon && echo "LOADID-FAULTS-ALIVE"
+kill -TERM $daemon
+wait $daemon && echo "LOADID-FAULTS-EXIT 0" || echo "LOADID-FAULTS-EXIT $?"
+kill -TERM $watcher
+wait $watcher || true
+echo "LOADID-FAULTS-BEGIN"
+cat /tmp/estimates.txt /tmp/faults.err
+echo "LOADID-FAULTS-END"
+cat /tmp/short.err
+cd /data
+
+# Refusals in live mode: one line on stderr, a non-zero exit.
+for c in bad nosuch; do
+    loadidd --config /data/$c.yaml 2> /tmp/$c.err && s=0 || s=$?
+    echo "LOADID-REFUSAL $c exit $s lines $(wc -l < /tmp/$c.err): $(cat /tmp/$c.err)"
+done
 echo "LOADID-VERDICT done"
 poweroff -f
 INIT
