@@ -34,7 +34,9 @@ public:
         W.col(N) = y;
         W = d_.asDiagonal() * W * t_.asDiagonal();
         gram_ = forgetting * gram_;
-        gram_.noalias() += W.transpose().lazyProduct(W);
+        // Only the lower triangle is computed and read (the eigen-solvers take
+        // it): the Gram matrix is exactly symmetric, and half the work.
+        gram_.template selfadjointView<Eigen::Lower>().rankUpdate(W.transpose());
     }
 
     // kappa(D A_Xi T1) = sqrt(lambda_max / lambda_min of Upsilon); +Inf when
