@@ -5,6 +5,9 @@
  *   - the CAN input: a SocketCAN raw socket (frames carry the kernel's
  *     receive time), or a candump log replayed in real time with its times
  *     rewritten to now;
+ *   - or, with sensor.type modbus, the eventfd of the Modbus F/T poller
+ *     thread (modbus_input.h: the serial line's blocking transactions stay
+ *     off this loop; samples arrive through a lock-free ring);
  *   - a 10 ms timerfd that ends zeroing and estimation windows on time and
  *     publishes status_t once a second;
  *   - a signalfd for SIGTERM and SIGINT (a clean stop).
@@ -47,6 +50,7 @@
 #include "loadid/lcm_wire.h"
 #include "loadid/pipeline.h"
 #include "loadid/socketcan.h"
+#include "modbus_input.h"
 #include "realtime.h"
 #include "saved_result.h"
 
@@ -78,6 +82,8 @@ typedef struct {
     double mono_t0;
     int file_done;                /* the file is replayed; the CAN input is quiet */
     int64_t can_errors, can_reopens, error_frames;
+    loadid_modbus_input_t *ft;    /* sensor.type modbus, else NULL */
+    int64_t ft_connected;         /* the poller's last reported state */
     uint32_t hist[HIST_BINS];
     double loop_max_us;
     int ticks;
@@ -183,10 +189,22 @@ static void publish_status(live_t *L) {
     m.samples_ok = st.samples_ok;
     m.frames_bad = st.frames_bad + L->error_frames;
     m.samples_incomplete = st.samples_incomplete;
-    /* status_t has no field for faults: saturated or faulty, both never
-     * reach an estimator (DESIGN.md). */
-    m.samples_saturated = st.samples_saturated + st.samples_faulty;
+    /* status_t has no field for faults: a sample saturated or faulty (or
+     * both, counted once) never reaches an estimator (DESIGN.md). */
+    m.samples_saturated = st.samples_rejected;
     m.sequence_gaps = st.sequence_gaps;
+    if (L->ft) {
+        /* The serial sensor's faults in status_t's terms: a bad frame (CRC,
+         * wrong slave, malformed status) or an exception is a bad frame, a
+         * transaction without answer an incomplete sample. Measurements
+         * the sensor's counter says were skipped are not sequence gaps:
+         * polling slower than the sensor measures skips them by design
+         * (--verbose and the poller's counters have them). */
+        loadid_modbus_input_stats_t ms;
+        loadid_modbus_input_stats(L->ft, &ms);
+        m.frames_bad += ms.ft.bad_frames + ms.ft.exceptions + ms.ft.samples_malformed;
+        m.samples_incomplete += ms.ft.timeouts;
+    }
     m.joint_msgs_bad = st.joint_msgs_bad;
     loop_stats(L, &m.loop_us_p50, &m.loop_us_p99, &m.loop_us_max);
     publish(L, "LOADID_STATUS", loadid_lcm_encode_status(&m, tx_buf, sizeof tx_buf));
@@ -275,6 +293,23 @@ static void read_socket(live_t *L) {
     }
 }
 
+static void on_ft_sample(void *ctx, const loadid_modbus_ft_sample_t *s) {
+    live_t *L = ctx;
+    loadid_pipeline_ft_sample(L->pipe, s->t_us, s->force, s->torque, s->saturated, s->faulty);
+}
+
+/* Once a second: say when the serial sensor was lost or came back. */
+static void watch_ft(live_t *L) {
+    loadid_modbus_input_stats_t ms;
+    loadid_modbus_input_stats(L->ft, &ms);
+    if (loadid_modbus_input_take_lost(L->ft))
+        fprintf(stderr, "loadidd: modbus %s lost: %s; reopening\n", L->cfg->modbus_device,
+                loadid_modbus_ft_strerror((int)ms.last_error));
+    if (ms.connected && !L->ft_connected)
+        fprintf(stderr, "loadidd: modbus %s open\n", L->cfg->modbus_device);
+    L->ft_connected = ms.connected;
+}
+
 /* File source: feeds every frame due by now, then arms the timer for the
  * next one. */
 static void read_file(live_t *L, int timer_fd) {
@@ -324,7 +359,7 @@ static void save_done(live_t *L) {
         fprintf(stderr, "loadidd: saved %s\n", path);
 }
 
-enum { TAG_LCM = 1, TAG_CAN, TAG_FILE, TAG_TICK, TAG_SIGNAL };
+enum { TAG_LCM = 1, TAG_CAN, TAG_FILE, TAG_TICK, TAG_SIGNAL, TAG_FT };
 
 int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     const loadid_live_options_t *opt) {
@@ -407,7 +442,18 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         fprintf(stderr, "loadidd: cannot set up the event loop: %s\n", strerror(errno));
         rc = 1;
     }
-    if (rc == 0 && opt->can_file) {
+    if (rc == 0 && cfg->sensor_type == LOADID_SENSOR_MODBUS) {
+        if (opt->can_file) {
+            fprintf(stderr, "loadidd: --can-file replays JR3 frames; sensor.type is modbus\n");
+            rc = 1;
+        } else if (loadid_modbus_input_start(cfg, &L.ft, err, sizeof err) != 0) {
+            fprintf(stderr, "loadidd: modbus: %s\n", err);
+            rc = 1;
+        } else if (add_fd(ep, loadid_modbus_input_fd(L.ft), TAG_FT) != 0) {
+            fprintf(stderr, "loadidd: cannot set up the event loop: %s\n", strerror(errno));
+            rc = 1;
+        }
+    } else if (rc == 0 && opt->can_file) {
         L.can_file = fopen(opt->can_file, "r");
         if (!L.can_file || loadid_candump_reader_open(L.can_file, &L.can_reader) != 0) {
             fprintf(stderr, "loadidd: %s: cannot read: %s\n", opt->can_file, strerror(errno));
@@ -459,6 +505,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     else lcm_handle(L.lcm);
                     break;
                 case TAG_CAN: read_socket(&L); break;
+                case TAG_FT: loadid_modbus_input_drain(L.ft, on_ft_sample, &L); break;
                 case TAG_FILE:
                     if (read(file_fd, &v, sizeof v) < 0) break;
                     read_file(&L, file_fd);
@@ -469,10 +516,14 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     loadid_notify_watchdog((int64_t)mono_us());
                     if (++L.ticks % 100 == 0) {
                         publish_status(&L);
-                        if (L.can_fd < 0 && !opt->can_file) { /* reopen a vanished interface */
+                        if (L.ft) watch_ft(&L);
+                        else if (L.can_fd < 0 && !opt->can_file) { /* reopen a vanished interface */
                             L.can_fd = loadid_socketcan_open(cfg->can_interface, cfg->can_base_id,
                                                              err, sizeof err);
-                            if (L.can_fd >= 0) add_fd(ep, L.can_fd, TAG_CAN), L.can_reopens++;
+                            if (L.can_fd >= 0) {
+                                add_fd(ep, L.can_fd, TAG_CAN), L.can_reopens++;
+                                fprintf(stderr, "loadidd: CAN %s open again\n", cfg->can_interface);
+                            }
                         }
                     }
                     break;
@@ -496,8 +547,22 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                 (long long)st.samples_faulty, (long long)st.sequence_gaps,
                 (long long)st.joint_msgs_bad, (long long)st.samples_stale,
                 (long long)L.can_errors, (long long)L.error_frames);
+        loadid_modbus_input_stats_t ms;
+        if (L.ft && loadid_modbus_input_stats(L.ft, &ms) == 0)
+            fprintf(stderr,
+                    "loadidd: modbus reads %lld, samples ok %lld, rejected %lld, stale %lld, "
+                    "gaps %lld, malformed %lld, timeouts %lld, bad frames %lld (CRC %lld), "
+                    "exceptions %lld, device lost %lld, ring overruns %lld, cycles missed %lld\n",
+                    (long long)ms.ft.reads, (long long)ms.ft.samples_ok,
+                    (long long)ms.ft.samples_rejected, (long long)ms.ft.samples_stale,
+                    (long long)ms.ft.counter_gaps, (long long)ms.ft.samples_malformed,
+                    (long long)ms.ft.timeouts, (long long)ms.ft.bad_frames,
+                    (long long)ms.ft.crc_errors, (long long)ms.ft.exceptions,
+                    (long long)ms.ft.device_lost, (long long)ms.ring_overruns,
+                    (long long)ms.cycles_missed);
     }
     publish_status(&L);
+    loadid_modbus_input_stop(L.ft);
     if (L.can_fd >= 0) close(L.can_fd);
     loadid_candump_reader_close(L.can_reader);
     if (L.can_file) fclose(L.can_file);

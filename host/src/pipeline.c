@@ -45,7 +45,7 @@ struct loadid_pipeline {
 
     int64_t frames_bad_extra, samples_used, estimator_errors;
     /* loadid_pipeline_ft_sample (a sensor without accelerometer) */
-    int64_t ft_ok, ft_saturated, ft_faulty;
+    int64_t ft_ok, ft_saturated, ft_faulty, ft_rejected;
     /* Samples wait here until a joint state at or after their time has
      * arrived, so the joints are interpolated at the sample's time, not
      * extrapolated, and the result does not depend on which of the two
@@ -408,6 +408,7 @@ void loadid_pipeline_ft_sample(loadid_pipeline_t *p, int64_t t_us, const double 
         /* Never fed (as the JR3's E_SATURATED / E_FAULT). */
         p->ft_saturated += saturated != 0;
         p->ft_faulty += faulty != 0;
+        p->ft_rejected++;
         return;
     }
     if (!force || !torque) {
@@ -454,6 +455,7 @@ void loadid_pipeline_status(const loadid_pipeline_t *p, loadid_pipeline_status_t
     st->samples_incomplete = j.samples_incomplete;
     st->samples_saturated = j.samples_saturated + p->ft_saturated;
     st->samples_faulty = j.samples_faulty + p->ft_faulty;
+    st->samples_rejected = j.samples_rejected + p->ft_rejected;
     st->sequence_gaps = j.sequence_gaps;
     st->joint_msgs_bad = s.joint_msgs_bad;
     st->samples_stale = s.samples_stale + s.samples_no_joints;

@@ -25,28 +25,44 @@ import pytest
 
 from recordings import program
 from test_live_lcm import run_session
+from test_live_modbus import run_modbus_session
+
+
+def counted(d, run):
+    """run() with the allocation counter preloaded into the daemon; its
+    result with the counter's report."""
+    lib = os.environ.get("LOADID_ALLOC_COUNT_LIB")
+    if not lib or not os.path.isfile(lib):
+        pytest.fail("LOADID_ALLOC_COUNT_LIB must name liballoc_count.so (ctest sets it)")
+    report = d / "alloc.txt"
+    os.environ["LOADID_DAEMON_PRELOAD"] = lib
+    os.environ["LOADID_ALLOC_REPORT"] = str(report)
+    try:
+        out = run()
+    finally:
+        del os.environ["LOADID_DAEMON_PRELOAD"], os.environ["LOADID_ALLOC_REPORT"]
+    out["report"] = report.read_text() if report.exists() else ""
+    return out
 
 
 @pytest.fixture(scope="module")
 def session(recording, tmp_path_factory):
-    lib = os.environ.get("LOADID_ALLOC_COUNT_LIB")
-    if not lib or not os.path.isfile(lib):
-        pytest.fail("LOADID_ALLOC_COUNT_LIB must name liballoc_count.so (ctest sets it)")
     d = tmp_path_factory.mktemp("live_no_alloc")
-    report = d / "alloc.txt"
     cfg = d / "c.yaml"
     cfg.write_text("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n"
                    f"results:\n  directory: {d / 'results'}\n"
                    "realtime:\n  priority: 10\n  lock_memory: true\n  cpu: 0\n")
-    os.environ["LOADID_DAEMON_PRELOAD"] = lib
-    os.environ["LOADID_ALLOC_REPORT"] = str(report)
-    try:
-        out = run_session(cfg, recording)
-    finally:
-        del os.environ["LOADID_DAEMON_PRELOAD"], os.environ["LOADID_ALLOC_REPORT"]
+    out = counted(d, lambda: run_session(cfg, recording))
     out["results"] = d / "results"
-    out["report"] = report.read_text() if report.exists() else ""
     return out
+
+
+@pytest.fixture(scope="module")
+def modbus_session(recording, tmp_path_factory):
+    """The serial sensor's session (test_live_modbus.py): the poller thread
+    and its device lost and reopened are inside the window too."""
+    d = tmp_path_factory.mktemp("live_no_alloc_modbus")
+    return counted(d, lambda: run_modbus_session(recording, d))
 
 
 def counts(report: str) -> dict:
@@ -84,8 +100,20 @@ def resolve(site: str) -> str:
     return re.sub(r"loadidd\+(0x[0-9a-f]+)\(\?\)", one, site)
 
 
-def test_no_allocation_between_start_up_and_shutdown(session):
+def assert_no_loop_allocation(session):
     c = counts(session["report"])
     sites = [resolve(l) for l in session["report"].splitlines()
              if l.startswith("site") and not l.startswith("site loop 0 ")]
     assert c["loop_allocations"] == 0, "allocations in the loop:\n" + "\n".join(sites)
+
+
+def test_no_allocation_between_start_up_and_shutdown(session):
+    assert_no_loop_allocation(session)
+
+
+def test_no_allocation_with_the_modbus_sensor_either(modbus_session):
+    assert modbus_session["returncode"] == 0, modbus_session["stderr"]
+    assert [e for e in modbus_session["estimate"] if e["state"] == 3], modbus_session["stderr"]
+    assert " lost: " in modbus_session["stderr"]  # the reopen path ran in the window
+    assert counts(modbus_session["report"])["epoll_waits"] > 1000, modbus_session["report"]
+    assert_no_loop_allocation(modbus_session)

@@ -186,11 +186,13 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: loadid-modbus-sim [--wrench FX,FY,FZ,TX,TY,TZ | --recording DIR] [--config FILE]\n"
             "                         [--link PATH] [--slave ID] [--full-scale FN,TNM] [--loop]\n"
-            "                         [--duration S] [--start-on-read]\n"
+            "                         [--duration S] [--start-on-read | --epoch UTIME]\n"
             "Serves the Modbus F/T register map (proto/modbus_ft.md) on a new pty and prints\n"
             "its slave path. --wrench default 0,0,9.81,0,0,0 [N, N m]; --full-scale default\n"
             "modbus.full_scale of --config (200 N, 12 N m). The recording's timeline starts\n"
-            "now, or with --start-on-read at the first sample read; --loop repeats it.\n");
+            "now, or with --start-on-read at the first sample read, or at --epoch (the wall\n"
+            "time in microseconds since the epoch of its first sample, so that a test can time\n"
+            "its joint states to it); --loop repeats it.\n");
 }
 
 int main(int argc, char **argv)
@@ -200,17 +202,28 @@ int main(int argc, char **argv)
         {"full-scale", required_argument, NULL, 'f'}, {"help", no_argument, NULL, 'h'},
         {"link", required_argument, NULL, 'k'},     {"loop", no_argument, NULL, 'l'},
         {"recording", required_argument, NULL, 'r'}, {"slave", required_argument, NULL, 's'},
-        {"start-on-read", no_argument, NULL, 'S'},
+        {"start-on-read", no_argument, NULL, 'S'}, {"epoch", required_argument, NULL, 'e'},
         {"wrench", required_argument, NULL, 'w'},   {NULL, 0, NULL, 0},
     };
     const char *config = NULL, *recording = NULL, *link_path = NULL;
     double wrench[6] = {0, 0, 9.81, 0, 0, 0}, fs[2] = {0, 0}, duration = 0;
     bool have_wrench = false, have_fs = false, loop = false, start_on_read = false;
     int slave = 1, c;
+    long long epoch_us = 0;
     while ((c = getopt_long(argc, argv, "", opts, NULL)) != -1) {
         switch (c) {
         case 'c': config = optarg; break;
         case 'd': duration = strtod(optarg, NULL); break;
+        case 'e': {
+            char *end;
+            epoch_us = strtoll(optarg, &end, 10);
+            if (*end || epoch_us <= 0) {
+                fprintf(stderr, "loadid-modbus-sim: --epoch: microseconds since the epoch, not %s\n",
+                        optarg);
+                return 2;
+            }
+            break;
+        }
         case 'f':
             if (parse_list(optarg, fs, 2) || !(fs[0] > 0) || !(fs[1] > 0)) {
                 fprintf(stderr, "loadid-modbus-sim: --full-scale: expected FN,TNM > 0\n");
@@ -313,7 +326,14 @@ int main(int argc, char **argv)
     printf("samples %zu\n", sim.n);
     fflush(stdout);
     sim.start_ns = mono_ns();
-    const int64_t end_ns = duration > 0 ? sim.start_ns + (int64_t)(duration * 1e9) : INT64_MAX;
+    const int64_t end_ns0 = sim.start_ns;
+    if (epoch_us > 0 && !start_on_read) {
+        struct timespec wall;
+        clock_gettime(CLOCK_REALTIME, &wall);
+        const int64_t wall_us = (int64_t)wall.tv_sec * 1000000 + wall.tv_nsec / 1000;
+        sim.start_ns += ((int64_t)epoch_us - wall_us) * 1000;
+    }
+    const int64_t end_ns = duration > 0 ? end_ns0 + (int64_t)(duration * 1e9) : INT64_MAX;
     while (!g_stop && !sim.ended && mono_ns() < end_ns) {
         /* A malformed request is dropped, as a sensor would; -EIO (nobody
          * holds the slave open) cannot last, this process holds it. */

@@ -78,6 +78,8 @@ typedef struct {
     int64_t samples_incomplete;
     int64_t samples_saturated;
     int64_t samples_faulty;
+    int64_t samples_rejected;     /* saturated or faulty or both, each once
+                                     (status_t.samples_saturated) */
     int64_t sequence_gaps;
     int64_t joint_msgs_bad;
     int64_t samples_stale;        /* no joint state close enough */
