@@ -369,6 +369,16 @@ static loadid_modbus_ft_config_t client_cfg(int timeout_ms)
     return c;
 }
 
+/* The sensor most tests use: 8 input and 6 holding registers, the latter
+ * holding kFsForce and kFsMoment in the register units (0.1 N, 0.01 N m). */
+static const uint16_t kFsRegisters[6] = {2000, 1000, 500, 1200, 600, 300};
+
+static void sensor_start_standard(sensor_t *s, bool counting)
+{
+    sensor_start(s, 8, 6, counting);
+    loadid_modbus_ft_server_set_holding(s->srv, kFsRegisters);
+}
+
 static loadid_modbus_ft_t *client(int timeout_ms)
 {
     loadid_modbus_ft_config_t c = client_cfg(timeout_ms);
@@ -474,9 +484,7 @@ static void pty_status_stale_gaps(void **state)
 {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
-    sensor_start(&s, 8, 6, false);
-    const uint16_t fs[6] = {2000, 1000, 500, 1200, 600, 300}; /* = kFsForce, kFsMoment */
-    loadid_modbus_ft_server_set_holding(s.srv, fs);
+    sensor_start_standard(&s, false);
     loadid_modbus_ft_t *ft = client(200);
     assert_int_equal(loadid_modbus_ft_open(ft), LOADID_MODBUS_FT_FULL_SCALE);
     const int c[6] = {1, 2, 3, 4, 5, 6};
@@ -514,9 +522,7 @@ static void pty_timeout(void **state)
 {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
-    sensor_start(&s, 8, 6, true);
-    const uint16_t fs[6] = {2000, 1000, 500, 1200, 600, 300};
-    loadid_modbus_ft_server_set_holding(s.srv, fs);
+    sensor_start_standard(&s, true);
     loadid_modbus_ft_t *ft = client(50);
     assert_true(loadid_modbus_ft_open(ft) >= 0);
     loadid_modbus_ft_sample_t out;
@@ -564,9 +570,7 @@ static void pty_crc_errors(void **state)
 {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
-    sensor_start(&s, 8, 6, true);
-    const uint16_t fs[6] = {2000, 1000, 500, 1200, 600, 300};
-    loadid_modbus_ft_server_set_holding(s.srv, fs);
+    sensor_start_standard(&s, true);
     loadid_modbus_ft_t *ft = client(100);
     assert_true(loadid_modbus_ft_open(ft) >= 0);
     loadid_modbus_ft_server_set_mode(s.srv, LOADID_MODBUS_FT_SERVER_BAD_CRC);
@@ -607,8 +611,7 @@ static void pty_exception(void **state)
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
     sensor_start(&s, 4, 6, false);
-    const uint16_t fs[6] = {2000, 1000, 500, 1200, 600, 300};
-    loadid_modbus_ft_server_set_holding(s.srv, fs);
+    loadid_modbus_ft_server_set_holding(s.srv, kFsRegisters);
     loadid_modbus_ft_t *ft = client(100);
     assert_int_equal(loadid_modbus_ft_open(ft), LOADID_MODBUS_FT_FULL_SCALE);
     loadid_modbus_ft_sample_t out;
@@ -631,9 +634,7 @@ static void pty_device_vanishes_and_returns(void **state)
 {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
-    sensor_start(&s, 8, 6, true);
-    const uint16_t fs[6] = {2000, 1000, 500, 1200, 600, 300};
-    loadid_modbus_ft_server_set_holding(s.srv, fs);
+    sensor_start_standard(&s, true);
     loadid_modbus_ft_t *ft = client(100);
     assert_true(loadid_modbus_ft_open(ft) >= 0);
     loadid_modbus_ft_sample_t out;
@@ -655,8 +656,7 @@ static void pty_device_vanishes_and_returns(void **state)
     assert_int_equal(st.io_errors, 1);
     assert_int_equal(st.open_failures, 1);
 
-    sensor_start(&s, 8, 6, true); /* a new pty behind the same path */
-    loadid_modbus_ft_server_set_holding(s.srv, fs);
+    sensor_start_standard(&s, true); /* a new pty behind the same path */
     assert_int_equal(loadid_modbus_ft_open(ft), LOADID_MODBUS_FT_FULL_SCALE);
     assert_int_equal(loadid_modbus_ft_read(ft, &out), LOADID_MODBUS_FT_SAMPLE);
     assert_int_equal(out.counter, 1); /* the new sensor's first: no gap, not stale */
@@ -791,9 +791,7 @@ static void poller_device_loss(void **state)
 {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
-    sensor_start(&s, 8, 6, true);
-    const uint16_t fs[6] = {2000, 1000, 500, 1200, 600, 300};
-    loadid_modbus_ft_server_set_holding(s.srv, fs);
+    sensor_start_standard(&s, true);
     loadid_config_t cfg = poller_cfg(200.0);
     loadid_modbus_input_t *in = NULL;
     char err[256];
@@ -819,8 +817,7 @@ static void poller_device_loss(void **state)
     loadid_modbus_input_drain(in, collect, &c); /* the first sensor's last ones */
     const int before = c.n;
     for (int i = 1; i < before && i < 4096; ++i) assert_int_equal(c.got[i].counter, c.got[i - 1].counter + 1);
-    sensor_start(&s, 8, 6, true); /* it comes back */
-    loadid_modbus_ft_server_set_holding(s.srv, fs);
+    sensor_start_standard(&s, true); /* it comes back */
     assert_true(wait_for(in, 1, 3000));
     run_loop(in, &c, 150);
     loadid_modbus_input_stats(in, &st);
