@@ -61,6 +61,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->signals = LOADID_SIGNALS_MIXED;
     cfg->offset_model_estimate = 0;
     cfg->duration_s = 1.5;
+    cfg->publish_every = 1;
     cfg->zeroing_window_s = 0.2;
 
     cfg->sensor_type = LOADID_SENSOR_JR3;
@@ -393,6 +394,7 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
             return loadid_yaml_fail(n, "unknown offset model '%s' (zeroing or estimate)", word);
     }
     TRY(read_number(s, "duration_s", &c->duration_s, POSITIVE));
+    TRY(read_int_range(s, "publish_every", &c->publish_every, 1, 1000000));
 
     TRY(read_section(root, "zeroing", &s));
     TRY(read_number(s, "window_s", &c->zeroing_window_s, POSITIVE));

@@ -44,7 +44,9 @@ static void usage(FILE *out) {
             "(Kubus, Kroeger, Wahl 2008). --offline runs the pipeline over a recording\n"
             "(can.log, lcm.log) and writes the final estimate of every configured method\n"
             "as a JSON array to OUT.json (default stdout). Without --offline it runs live:\n"
-            "LCM in and out, JR3 frames from SocketCAN or a candump log (--can-file).\n",
+            "LCM in and out, JR3 frames from SocketCAN or a candump log (--can-file),\n"
+            "or a Modbus F/T sensor (sensor.type modbus). --publish-every overrides\n"
+            "estimation.publish_every.\n",
             prog, prog);
 }
 
@@ -123,7 +125,7 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
 
 int main(int argc, char **argv) {
     const char *config_path = NULL, *offline = NULL, *result = NULL, *can_file = NULL;
-    int publish_every = 1;
+    int publish_every = 0; /* 0: estimation.publish_every */
     long long epoch = 0;
     static const struct option opts[] = {
         {"config", required_argument, NULL, 'c'}, {"offline", required_argument, NULL, 'o'},
@@ -168,7 +170,9 @@ int main(int argc, char **argv) {
     if (loadid_setup_load(prog, config_path, &cfg, &chain) != 0) return 1;
     if (!offline) {
         loadid_live_options_t live = {.can_file = can_file, .can_file_epoch = epoch,
-                                      .publish_every = publish_every, .verbose = verbose};
+                                      .publish_every = publish_every ? publish_every
+                                                                     : cfg.publish_every,
+                                      .verbose = verbose};
         return loadid_live_run(&cfg, &chain, &live);
     }
     return run_offline(&cfg, &chain, offline, result);

@@ -170,6 +170,7 @@ static void assert_defaults(const loadid_config_t *c) {
     assert_int_equal(c->signals, LOADID_SIGNALS_MIXED);
     assert_int_equal(c->offset_model_estimate, 0);
     ASSERT_EQ_D(c->duration_s, 1.5);
+    assert_int_equal(c->publish_every, 1);
     ASSERT_EQ_D(c->zeroing_window_s, 0.2);
     assert_doubles(c->distal_phi, (const double[10]){0}, 10, "distal_phi");
 
@@ -295,6 +296,7 @@ static const char kEveryKey[] =
     "  signals: kf\n"
     "  offset_model: estimate\n"
     "  duration_s: 3\n"
+    "  publish_every: 20\n"
     "zeroing:\n"
     "  window_s: 0.5\n"
     "distal:\n"
@@ -373,6 +375,7 @@ static void every_key_is_read(void **state) {
     assert_int_equal(c.signals, LOADID_SIGNALS_KF);
     assert_int_equal(c.offset_model_estimate, 1);
     ASSERT_EQ_D(c.duration_s, 3);
+    assert_int_equal(c.publish_every, 20);
     ASSERT_EQ_D(c.zeroing_window_s, 0.5);
     assert_doubles(c.distal_phi,
                    (const double[]){0.2, 0.001, -0.002, 0.0008, 1e-4, 0, 0, 1.5e-4, 0, 1.6e-4}, 10,
@@ -517,6 +520,8 @@ static void relative_urdf_paths_follow_the_config_file(void **state) {
     assert_int_equal(c.rt_lock_memory, 1);
     assert_int_equal(c.rt_cpu, 1);
     expect_error("realtime:\n  priority: 100\n", "2: realtime.priority: must be 0..99, got 100");
+    expect_error("estimation:\n  publish_every: 0\n",
+                 "2: estimation.publish_every: must be 1..1000000, got 0");
 
     /* results.directory and results.load follow the same rule; default "". */
     assert_string_equal(c.results_directory, "");

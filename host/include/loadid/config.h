@@ -71,6 +71,10 @@ typedef struct {
     int signals;                        /* loadid_signal_source_t; default MIXED */
     int offset_model_estimate;          /* 0: "zeroing" (default), 1: "estimate" */
     double duration_s;                  /* default 1.5 */
+    int publish_every;                  /* estimation.publish_every: (loadid) live,
+                                           estimate_t after every n-th sample while
+                                           estimating (1, default: every sample);
+                                           the final one always; 1..1000000 */
 
     /* zeroing: */
     double zeroing_window_s;            /* default 0.2 */
