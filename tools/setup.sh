@@ -35,8 +35,10 @@ DEBIAN_PACKAGES=(
   libsystemd-dev
   # the vcan test's virtual machine: qemu, busybox for its initramfs, cpio
   qemu-system-x86 busybox-static cpio
-  # lcm-spy with the project's types: Java, lcm.jar, jchart2d; Xvfb and a screenshot
-  default-jdk-headless liblcm-java libjchart2d-java xvfb imagemagick
+  # lcm-spy with the project's types: Java, lcm.jar, jchart2d; Xvfb and a screenshot.
+  # The headless JDK compiles the jar; lcm-spy's window needs the JRE's AWT
+  # X11 library (libawt_xawt.so), which only default-jre brings.
+  default-jdk-headless default-jre liblcm-java libjchart2d-java xvfb imagemagick
   # the Debian Python that makes build/venv (its packages come from PyPI)
   python3 python3-venv
   # HTTPS to PyPI for pip, and git for working in the clone

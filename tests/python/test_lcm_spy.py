@@ -55,8 +55,10 @@ def test_lcm_spy_decodes_estimate_t(tmp_path):
                OUT=str(out), PYTHON=sys.executable)
     r = subprocess.run(["unshare", "-n", "sh", "-c", SESSION], env=env, capture_output=True,
                        text=True, timeout=120)
-    assert r.returncode == 0, r.stderr
-    spy_out = (out / "spy.out").read_text()
+    spy_out = (out / "spy.out").read_text() if (out / "spy.out").exists() else ""
+    # A spy that exited early (a headless Java: HeadlessException) makes
+    # the final kill fail; its own output says why.
+    assert r.returncode == 0, r.stderr + "\nlcm-spy's output:\n" + spy_out
     assert "Found 5 LCM types" in spy_out, spy_out
     shot = out / "lcm-spy.png"
     assert shot.stat().st_size > 1000
