@@ -20,21 +20,37 @@ void svd_left(const Work &M, Square &U, Values &s) {
     Values norm2(n);
     for (int j = 0; j < n; ++j) norm2(j) = X.col(j).squaredNorm();
     const Real tol = kEps;
+    // A sweep whose rotations all had |t| <= tiny leaves off-diagonal terms
+    // of X^T X of order n t^2 <= eps / 4 of the norms (quadratic
+    // convergence of cyclic Jacobi): the next sweep would rotate nothing.
+    const Real tiny = std::sqrt(kEps / Real(4 * n));
     for (int sweep = 0; sweep < 60; ++sweep) {
         bool rotated = false;
+        Real t_max = 0;
         for (int p = 0; p < n - 1; ++p) {
             for (int q = p + 1; q < n; ++q) {
                 const Real a = norm2(p), b = norm2(q);
                 if (!(a > 0) || !(b > 0)) continue;
                 Real *xp = X.col(p).data(), *xq = X.col(q).data();
-                Real g = 0;
-                for (int i = 0; i < m; ++i) g += xp[i] * xq[i];
+                // Four partial sums: one chain of m dependent additions
+                // was the latency of every pair.
+                Real g0 = 0, g1 = 0, g2 = 0, g3 = 0;
+                int k = 0;
+                for (; k + 4 <= m; k += 4) {
+                    g0 += xp[k] * xq[k];
+                    g1 += xp[k + 1] * xq[k + 1];
+                    g2 += xp[k + 2] * xq[k + 2];
+                    g3 += xp[k + 3] * xq[k + 3];
+                }
+                for (; k < m; ++k) g0 += xp[k] * xq[k];
+                const Real g = (g0 + g1) + (g2 + g3);
                 if (!(std::abs(g) > tol * std::sqrt(a * b))) continue;
                 rotated = true;
                 // The rotation that zeroes the (p, q) element of X^T X.
                 const Real zeta = (b - a) / (Real(2) * g);
                 const Real t = (zeta >= 0 ? Real(1) : Real(-1)) / (std::abs(zeta) + std::sqrt(Real(1) + zeta * zeta));
                 const Real c = Real(1) / std::sqrt(Real(1) + t * t), sn = c * t;
+                t_max = std::max(t_max, std::abs(t));
                 for (int i = 0; i < m; ++i) {
                     const Real u = xp[i], v = xq[i];
                     xp[i] = c * u - sn * v;
@@ -50,7 +66,7 @@ void svd_left(const Work &M, Square &U, Values &s) {
                 norm2(q) = b + t * g;
             }
         }
-        if (!rotated) break;
+        if (!rotated || t_max <= tiny) break;
         for (int j = 0; j < n; ++j) norm2(j) = X.col(j).squaredNorm();  // refresh the running norms
     }
     // Sort by descending singular value (selection sort: n <= 17).

@@ -58,8 +58,11 @@ public:
         out.setZero();
         const int rc = excitation_gate(excitation_, excitation_.noise_ratio(), cfg, samples_, info);
         if (rc) return rc;
-        if (!phi_.allFinite()) return LOADID_E_NOT_EXCITED;
-        out = phi_;
+        // RIV keeps M and b (information form): its phi is solved here,
+        // when asked for, not after every sample.
+        const Vec<N> solved = instrumental_ ? Vec<N>(M_.partialPivLu().solve(b_)) : phi_;
+        if (!solved.allFinite()) return LOADID_E_NOT_EXCITED;
+        out = solved;
         return 0;
     }
 
@@ -101,7 +104,6 @@ private:
         M_.noalias() += CtLi.lazyProduct(B);
         b_ = lam * b_;
         b_.noalias() += CtLi * y;
-        phi_ = M_.partialPivLu().solve(b_);
     }
 
     const bool instrumental_;
