@@ -10,9 +10,10 @@
 // Sigma - K A Sigma loses eps * p0 to rounding; Bierman 1977, ch. V).
 // RIV's Sigma is not symmetric, so UD does not apply; it keeps
 // M = Sigma^-1 = lambda M + C^T Lambda^-1 B and b = lambda b + C^T Lambda^-1 y
-// (Sigma_0^-1 = I / p0) and solves M phi = b by LU each sample: the value
-// eqs. (20)-(22) reach through the matrix inversion lemma, without their
-// cancellation (which costs 1e-3 of phi after 100 samples at p0 = 1e6).
+// (Sigma_0^-1 = I / p0) and solves M phi = b by LU when an estimate is
+// asked for: the value eqs. (20)-(22) reach through the matrix inversion
+// lemma, without their cancellation (which costs 1e-3 of phi after 100
+// samples at p0 = 1e6).
 #pragma once
 
 #include "estimator_base.hpp"
