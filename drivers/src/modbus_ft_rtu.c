@@ -21,24 +21,6 @@ struct loadid_modbus_ft {
     char last_error[LOADID_MODBUS_FT_DEVICE_MAX + 128];
 };
 
-/* The speeds libmodbus 3.1's RTU backend maps onto termios B* constants on
- * Linux (modbus-rtu.c, _modbus_rtu_connect); any other it replaces with
- * 9600 without an error, so they are refused here. */
-static const int kBauds[] = {110,    300,     600,     1200,    2400,    4800,    9600,
-                             19200,  38400,   57600,   115200,  230400,  460800,  500000,
-                             576000, 921600,  1000000, 1152000, 1500000, 2000000, 2500000,
-                             3000000, 3500000, 4000000};
-
-bool loadid_modbus_ft_baud_supported(int baud)
-{
-    for (size_t i = 0; i < sizeof kBauds / sizeof kBauds[0]; ++i) {
-        if (kBauds[i] == baud) {
-            return true;
-        }
-    }
-    return false;
-}
-
 void loadid_modbus_ft_config_default(loadid_modbus_ft_config_t *cfg)
 {
     if (!cfg) {

@@ -16,6 +16,7 @@
 
 #include "loadid/estimator.h"
 #include "loadid/joint_filter.h"
+#include "loadid/modbus_ft.h"
 #include "loadid/signals.h"
 #include "loadid/yaml_tree.h"
 
@@ -430,21 +431,6 @@ fail:
     return -EINVAL;
 }
 
-/* The speeds libmodbus 3.1's RTU backend maps onto termios constants on
- * Linux (modbus-rtu.c); it silently uses 9600 for any other. The same list
- * as drivers/src/modbus_ft_rtu.c (loadid_modbus_ft_baud_supported; the
- * Modbus test checks that both accept the same rates): this library does
- * not link libmodbus. */
-static int baud_supported(int baud) {
-    static const int bauds[] = {110,     300,     600,     1200,    2400,    4800,
-                                9600,    19200,   38400,   57600,   115200,  230400,
-                                460800,  500000,  576000,  921600,  1000000, 1152000,
-                                1500000, 2000000, 2500000, 3000000, 3500000, 4000000};
-    for (size_t i = 0; i < sizeof bauds / sizeof bauds[0]; ++i)
-        if (bauds[i] == baud) return 1;
-    return 0;
-}
-
 /* sensor: and modbus:, after estimation: (signals is checked against the
  * sensor type). */
 static int read_sensor_modbus(loadid_yaml_node_t *root, loadid_config_t *c) {
@@ -482,7 +468,7 @@ static int read_sensor_modbus(loadid_yaml_node_t *root, loadid_config_t *c) {
     if ((n = loadid_yaml_get(s, "baud"))) {
         int baud;
         TRY(loadid_yaml_as_int(n, &baud));
-        if (!baud_supported(baud))
+        if (!loadid_modbus_ft_baud_supported(baud))
             return loadid_yaml_fail(n, "unsupported baud rate %d (one of 1200, 2400, 4800, 9600, "
                                        "19200, 38400, 57600, 115200, 230400, 460800, 921600, ...)",
                                     baud);

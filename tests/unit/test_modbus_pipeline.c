@@ -171,7 +171,8 @@ static void config_every_key_and_defaults(void **state)
     assert_true(d.modbus_rate_hz == c.modbus_rate_hz);
 }
 
-/* config.c keeps its own copy of libmodbus' baud list: both must agree. */
+/* modbus.baud: the configuration accepts exactly the rates the driver can
+ * set (libmodbus' list), and the 19 of these candidates that it holds. */
 static void config_bauds_match_the_driver(void **state)
 {
     (void)state;
