@@ -46,6 +46,7 @@ struct loadid_pipeline {
     int64_t frames_bad_extra, samples_used, estimator_errors;
     /* loadid_pipeline_ft_sample (a sensor without accelerometer) */
     int64_t ft_ok, ft_saturated, ft_faulty, ft_rejected;
+    int ft_source_noted;          /* the refusal below was logged */
     /* Samples wait here until a joint state at or after their time has
      * arrived, so the joints are interpolated at the sample's time, not
      * extrapolated, and the result does not depend on which of the two
@@ -418,8 +419,10 @@ void loadid_pipeline_ft_sample(loadid_pipeline_t *p, int64_t t_us, const double 
     if (p->cfg.signals == LOADID_SIGNALS_SENSOR || p->cfg.signals == LOADID_SIGNALS_MIXED) {
         /* The source wants the JR3's accelerometer, which this sample does
          * not have (config.c refuses sensor.type modbus with these). */
-        if (p->frames_bad_extra++ == 0)
+        p->frames_bad_extra++;
+        if (!p->ft_source_noted)
             note(p, "F/T sample without accelerometer refused: estimation.signals needs one");
+        p->ft_source_noted = 1;
         return;
     }
     loadid_jr3_sample_t s;
