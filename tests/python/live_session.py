@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import json
 import os
-import select
 import socket
 import subprocess
 import sys
@@ -26,7 +25,7 @@ import time
 
 import lcm
 
-URL = "udpm://239.255.76.67:7667?ttl=0"
+from lcm_loopback import URL, Outputs, loopback_multicast, recording_streams
 
 
 def main():
@@ -35,32 +34,11 @@ def main():
     sys.path.insert(0, pydir)
     import loadid  # lcm-gen's Python types
 
-    subprocess.run(["ip", "link", "set", "lo", "up"], check=True)
-    subprocess.run(["ip", "route", "add", "224.0.0.0/4", "dev", "lo"], check=True)
-
-    first_can = None
-    with open(f"{rec}/can.log") as f:
-        line = f.readline()
-        sec, usec = line[1:line.index(")")].split(".")
-        first_can = int(sec) * 1_000_000 + int(usec)
-    events = [(ev.timestamp, ev.channel, ev.data) for ev in lcm.EventLog(f"{rec}/lcm.log", "r")]
-
+    loopback_multicast()
+    first_can, events = recording_streams(rec)
     lc = lcm.LCM(URL)
-    got = {"estimate": [], "status": [], "wrench": []}
-
-    reencoded_differ = []  # messages whose lcm-gen re-encoding differs from the bytes received
-
-    def keep(kind, cls):
-        def handler(ch, data):
-            m = cls.decode(data)
-            if m.encode() != data:
-                reencoded_differ.append(ch)
-            got[kind].append(m)
-        return handler
-
-    lc.subscribe("LOADID_ESTIMATE", keep("estimate", loadid.estimate_t))
-    lc.subscribe("LOADID_STATUS", keep("status", loadid.status_t))
-    lc.subscribe("LOADID_WRENCH", keep("wrench", loadid.wrench_t))
+    out = Outputs(lc, loadid)
+    got = out.got
 
     # systemd's side of Type=notify: a datagram socket in NOTIFY_SOCKET.
     notify_path = os.path.join(tempfile.mkdtemp(), "notify")
@@ -92,13 +70,7 @@ def main():
                 return
 
     def pump(until):
-        while True:
-            drain_notify()
-            left = until - time.time()
-            if left <= 0:
-                return
-            if select.select([lc.fileno()], [], [], min(left, 0.05))[0]:
-                lc.handle()
+        out.pump(until, drain_notify)
 
     for t, channel, data in events:
         pump((t + shift) / 1e6)
@@ -149,7 +121,7 @@ def main():
 
     print(json.dumps({
         "returncode": daemon.returncode, "stderr": err, "cli": cli_log, "notify": notes,
-        "sched": sched, "memory_kb": memory, "reencoded_differ": len(reencoded_differ),
+        "sched": sched, "memory_kb": memory, "reencoded_differ": out.reencoded_differ,
         "estimate": [est(m) for m in got["estimate"]],
         "status": [{"state": m.state, "samples_ok": m.samples_ok, "frames_bad": m.frames_bad,
                     "samples_incomplete": m.samples_incomplete,

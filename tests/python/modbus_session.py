@@ -22,14 +22,13 @@ from __future__ import annotations
 
 import json
 import os
-import select
 import subprocess
 import sys
 import time
 
 import lcm
 
-URL = "udpm://239.255.76.67:7667?ttl=0"
+from lcm_loopback import URL, Outputs, loopback_multicast, recording_streams
 
 
 def start_sim(sim, *args):
@@ -45,34 +44,12 @@ def main():
     sys.path.insert(0, pydir)
     import loadid  # lcm-gen's Python types
 
-    subprocess.run(["ip", "link", "set", "lo", "up"], check=True)
-    subprocess.run(["ip", "route", "add", "224.0.0.0/4", "dev", "lo"], check=True)
-
-    with open(f"{rec}/can.log") as f:
-        line = f.readline()
-        sec, usec = line[1:line.index(")")].split(".")
-        first_can = int(sec) * 1_000_000 + int(usec)
-    events = [(ev.timestamp, ev.channel, ev.data) for ev in lcm.EventLog(f"{rec}/lcm.log", "r")]
-
+    loopback_multicast()
+    first_can, events = recording_streams(rec)
     lc = lcm.LCM(URL)
-    got = {"estimate": [], "status": [], "wrench": []}
-
-    def keep(kind, cls):
-        def handler(ch, data):
-            got[kind].append(cls.decode(data))
-        return handler
-
-    lc.subscribe("LOADID_ESTIMATE", keep("estimate", loadid.estimate_t))
-    lc.subscribe("LOADID_STATUS", keep("status", loadid.status_t))
-    lc.subscribe("LOADID_WRENCH", keep("wrench", loadid.wrench_t))
-
-    def pump(until):
-        while True:
-            left = until - time.time()
-            if left <= 0:
-                return
-            if select.select([lc.fileno()], [], [], min(left, 0.05))[0]:
-                lc.handle()
+    out = Outputs(lc, loadid)
+    got = out.got
+    pump = out.pump
 
     epoch = int(time.time() * 1e6) + 2_000_000
     sensor = start_sim(sim, "--recording", rec, "--config", config, "--link", link,

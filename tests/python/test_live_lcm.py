@@ -25,16 +25,21 @@ from recordings import program
 HERE = pathlib.Path(__file__).resolve().parent
 
 
-def run_session(cfg, recording, *extra):
+def run_in_netns(script, *args):
+    """script (a session beside this file) with args in a private network
+    namespace; what it printed, as JSON."""
     if os.geteuid() != 0 or not shutil.which("unshare") or not shutil.which("ip"):
-        pytest.fail("the LCM test needs root, unshare (util-linux) and ip (iproute2): "
+        pytest.fail("the live tests need root, unshare (util-linux) and ip (iproute2): "
                     "CI runs as root and tools/setup.sh installs both")
-    r = subprocess.run(["unshare", "-n", sys.executable, str(HERE / "live_session.py"),
-                        program("LOADIDD_EXE"), str(cfg), str(recording),
-                        os.environ["LOADID_LCM_PYTHON_DIR"], program("LOADID_CLI_EXE"), *extra],
-                       capture_output=True, text=True, timeout=120)
+    r = subprocess.run(["unshare", "-n", sys.executable, str(HERE / script),
+                        *[str(a) for a in args]], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
-    out = json.loads(r.stdout)
+    return json.loads(r.stdout)
+
+
+def run_session(cfg, recording, *extra):
+    out = run_in_netns("live_session.py", program("LOADIDD_EXE"), cfg, recording,
+                       os.environ["LOADID_LCM_PYTHON_DIR"], program("LOADID_CLI_EXE"), *extra)
     out["config"] = cfg
     return out
 

@@ -12,17 +12,13 @@ from __future__ import annotations
 
 import json
 import os
-import pathlib
-import shutil
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 from recordings import program, read_truth
+from test_live_lcm import run_in_netns
 
-HERE = pathlib.Path(__file__).resolve().parent
 RTLS, DONE = 3, 3
 
 
@@ -34,8 +30,6 @@ def physical(phi):
 def run_modbus_session(recording, d):
     """The session of modbus_session.py in a private network namespace,
     configuration and results in the folder d."""
-    if os.geteuid() != 0 or not shutil.which("unshare") or not shutil.which("ip"):
-        pytest.fail("the live Modbus test needs root, unshare (util-linux) and ip (iproute2)")
     link = d / "ft"
     cfg = d / "c.yaml"
     cfg.write_text("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n"
@@ -43,12 +37,9 @@ def run_modbus_session(recording, d):
                    f"modbus:\n  device: {link}\n  rate_hz: 500\n  timeout_ms: 50\n"
                    "estimation:\n  signals: kf\n"
                    f"results:\n  directory: {d / 'results'}\n")
-    r = subprocess.run(["unshare", "-n", sys.executable, str(HERE / "modbus_session.py"),
-                        program("LOADIDD_EXE"), program("LOADID_MODBUS_SIM_EXE"), str(cfg),
-                        str(recording), os.environ["LOADID_LCM_PYTHON_DIR"], str(link)],
-                       capture_output=True, text=True, timeout=120)
-    assert r.returncode == 0, r.stderr
-    out = json.loads(r.stdout)
+    out = run_in_netns("modbus_session.py", program("LOADIDD_EXE"),
+                       program("LOADID_MODBUS_SIM_EXE"), cfg, recording,
+                       os.environ["LOADID_LCM_PYTHON_DIR"], link)
     out["recording"] = recording
     out["results"] = d / "results"
     return out
