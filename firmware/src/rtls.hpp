@@ -10,6 +10,7 @@
 
 #include <cmath>
 
+#include "brand_jacobi.hpp"
 #include "estimator_base.hpp"
 #include "excitation.hpp"
 #include "linalg.hpp"
@@ -121,6 +122,17 @@ private:
     // Eqs. (25)-(35) for one block.
     void brand_update(const Block &Nk) {
         Block L = U_.transpose().lazyProduct(Nk);  // eq. (27); rows >= r are 0
+        if (rank_ == N1) {
+            // Full rank: nothing of N_k lies outside span(U) (eqs. 32-33),
+            // Z = [S_k L_k], and U' = U U_Z.
+            MatU Uz;
+            Vec<N1> sz;
+            brand_jacobi<N1>(s_, L, Uz, sz);
+            const MatU basis = U_;
+            U_.noalias() = basis.lazyProduct(Uz);
+            s_ = sz;
+            return;
+        }
         MatU basis = U_;                // [U_k J_k], eq. (34)
         linalg::Work Z = linalg::Work::Zero(N1, N1 + LOADID_NROWS);  // eq. (29), zero-padded
         int p = 0;
