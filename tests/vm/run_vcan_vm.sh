@@ -49,9 +49,11 @@ for m in net/can/can.ko net/can/can-raw.ko drivers/net/can/dev/can-dev.ko driver
     cp "$mods/$m" "$root/lib/modules/"
 done
 
-# Programs with their shared libraries (and the dynamic loader).
+# Programs with their shared libraries (and the dynamic loader), without
+# their debug information: the release build's (-g, Eigen's templates) is
+# most of their 80 MB, and the initramfs must unpack in the VM's 512 MB.
 copy_prog() {
-    cp "$1" "$root/bin/"
+    strip --strip-debug -o "$root/bin/$(basename "$1")" "$1"
     ldd "$1" | awk '/=> \//{print $3} /^\t\/lib64/{print $1}' | while read -r lib; do
         mkdir -p "$root$(dirname "$lib")"
         cp -L "$lib" "$root$lib"
