@@ -74,7 +74,7 @@ private:
         D_ /= cfg.forgetting;
         for (int row = 0; row < LOADID_NROWS; ++row) {
             const Vec<N> h = A.row(row).transpose();
-            const Vec<N> f = U_.transpose() * h;
+            const Vec<N> f = U_.transpose().lazyProduct(h);
             const Vec<N> v = D_.cwiseProduct(f);
             Vec<N> b;
             Real alpha = lambda_(row) + v(0) * f(0);
