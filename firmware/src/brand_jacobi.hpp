@@ -1,6 +1,8 @@
 // The SVD inside Brand's update once M has full rank: Z = [S_k L_k] of
-// eq. (29), S_k diagonal (N1 x N1), L_k = U^T N_k (N1 x 6). Only its left
-// singular vectors and values are needed (eq. 30).
+// eq. (29), S_k diagonal (N1 x N1), L_k = U^T N_k (N1 x C, C = 6 per
+// sample: C > 6 when several samples' blocks N_k are taken at once, as
+// Brand's update allows). Only its left singular vectors and values are
+// needed (eq. 30).
 //
 // One-sided (Hestenes) Jacobi on X = Z^T, as linalg::svd_left, using Z's
 // shape: after rotations V, X V = [S V; L^T V], so the upper block is
@@ -64,11 +66,11 @@ constexpr bool round_robin_is_complete() {
 }
 
 // U (N1 x N1) and sv (descending): the left singular vectors and values of
-// [diag(s) L].
-template <int N1>
-void brand_jacobi(const Vec<N1> &s, const Eigen::Matrix<Real, N1, LOADID_NROWS> &L,
+// [diag(s) L]. Zero columns of L change nothing.
+template <int N1, int C>
+void brand_jacobi(const Vec<N1> &s, const Eigen::Matrix<Real, N1, C> &L,
                   Eigen::Matrix<Real, N1, N1> &U, Vec<N1> &sv) {
-    constexpr int kRows = (N1 + LOADID_NROWS + 1) / 2 * 2;  // even: whole SSE packets
+    constexpr int kRows = (N1 + C + 1) / 2 * 2;  // even: whole SSE packets
     using Col = Eigen::Matrix<Real, kRows, 1>;
     using Sched = RoundRobin<N1>;
     constexpr int K = Sched::kPairs;
@@ -78,10 +80,10 @@ void brand_jacobi(const Vec<N1> &s, const Eigen::Matrix<Real, N1, LOADID_NROWS> 
 
     Eigen::Matrix<Real, kRows, N1> X = Eigen::Matrix<Real, kRows, N1>::Zero();
     X.template topRows<N1>().setIdentity();
-    X.template middleRows<LOADID_NROWS>(N1) = L.transpose();
+    X.template middleRows<C>(N1) = L.transpose();
     Col w = Col::Zero();
     w.template head<N1>() = s.cwiseAbs2();
-    w.template segment<LOADID_NROWS>(N1).setOnes();
+    w.template segment<C>(N1).setOnes();
     const auto weighted_norm2 = [&](int j) { return w.dot(X.col(j).cwiseAbs2()); };
 
     Vec<N1> norm2;

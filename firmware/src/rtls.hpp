@@ -6,6 +6,15 @@
 // U is stored as a full (N+1)x(N+1) matrix whose first r columns are the
 // current basis (r = rank of M so far) and whose other columns are zero, so
 // every product has a compile-time size: no heap, in any branch.
+//
+// Once M has full rank, the blocks N_k of up to kBlock samples wait and are
+// taken into one update together (Brand's update holds for a block of any
+// width: eqs. 27-33 with N_k = [N_k1 ... N_kb]); an estimate first applies
+// those waiting. The result is the same SVD of M up to rounding, and a
+// sample costs less than half: one Jacobi on [S L] with 24 columns takes
+// about as many sweeps as one with 6 (3.4 against 3.0 on the benchmark's
+// recording), and U U_Z and the orthogonality check run once a block. An
+// estimate after every sample makes every block one sample long.
 #pragma once
 
 #include <cmath>
@@ -24,6 +33,8 @@ class Rtls final : public loadid_est {
     static constexpr int kMaxInit = 3 * LOADID_NROWS;
     using MatU = Eigen::Matrix<Real, N1, N1>;
     using Block = Eigen::Matrix<Real, N1, LOADID_NROWS>;
+    static constexpr int kBlock = 4;  // samples per deferred update, at most
+    using Pending = Eigen::Matrix<Real, N1, LOADID_NROWS * kBlock>;
 
 public:
     explicit Rtls(const loadid_est_config_t &c)
@@ -39,6 +50,7 @@ public:
         samples_ = 0;
         reorth_ = 0;
         ortho_error_ = 0;
+        pending_count_ = 0;
     }
 
     int update(const Real *a, const Real *, const Real *y) override {
@@ -55,12 +67,18 @@ public:
             if (++init_count_ == cfg.rtls_init_samples) initial_svd();
             return 0;
         }
-        brand_update(Nk);
-        check_orthogonality();
+        if (rank_ < N1) {
+            brand_update(Nk);
+            check_orthogonality();
+            return 0;
+        }
+        pending_.template middleCols<LOADID_NROWS>(LOADID_NROWS * pending_count_) = Nk;
+        if (++pending_count_ == kBlock) apply_pending();
         return 0;
     }
 
     int estimate(Real *phi, loadid_est_info_t *info) const override {
+        apply_pending();
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
         const int gate = excitation_gate(excitation_, noise_ratio(), cfg, samples_, info);
@@ -119,20 +137,39 @@ private:
 
     Real rank_tol(Real scale) const { return cfg.rtls_eps * Real(N1) * scale; }
 
-    // Eqs. (25)-(35) for one block.
+    // Full rank: nothing of the waiting blocks lies outside span(U), so
+    // eqs. (27) and (29)-(33) for N = [N_k1 ... N_kb]: Z = [S L], L = U^T N,
+    // U' = U U_Z. The Jacobi is instantiated for 1, 2 and 4 samples; 3 are
+    // padded with zero columns, which change nothing.
+    void apply_pending() const {
+        if (pending_count_ == 0) return;
+        if (pending_count_ <= 1)
+            apply_block<1>();
+        else if (pending_count_ <= 2)
+            apply_block<2>();
+        else
+            apply_block<kBlock>();
+        pending_count_ = 0;
+        check_orthogonality();
+    }
+
+    template <int B>
+    void apply_block() const {
+        constexpr int C = LOADID_NROWS * B;
+        const int used = LOADID_NROWS * pending_count_;
+        pending_.middleCols(used, LOADID_NROWS * kBlock - used).setZero();
+        const Eigen::Matrix<Real, N1, C> L = U_.transpose().lazyProduct(pending_.template leftCols<C>());
+        MatU Uz;
+        Vec<N1> sz;
+        brand_jacobi<N1, C>(s_, L, Uz, sz);
+        const MatU basis = U_;
+        U_.noalias() = basis.lazyProduct(Uz);
+        s_ = sz;
+    }
+
+    // Eqs. (25)-(35) for one block while M has rank r < N + 1.
     void brand_update(const Block &Nk) {
         Block L = U_.transpose().lazyProduct(Nk);  // eq. (27); rows >= r are 0
-        if (rank_ == N1) {
-            // Full rank: nothing of N_k lies outside span(U) (eqs. 32-33),
-            // Z = [S_k L_k], and U' = U U_Z.
-            MatU Uz;
-            Vec<N1> sz;
-            brand_jacobi<N1>(s_, L, Uz, sz);
-            const MatU basis = U_;
-            U_.noalias() = basis.lazyProduct(Uz);
-            s_ = sz;
-            return;
-        }
         MatU basis = U_;                // [U_k J_k], eq. (34)
         linalg::Work Z = linalg::Work::Zero(N1, N1 + LOADID_NROWS);  // eq. (29), zero-padded
         int p = 0;
@@ -177,7 +214,7 @@ private:
     }
 
     // Brand's re-orthogonalisation, when ||U^T U - I|| drifts past the bound.
-    void check_orthogonality() {
+    void check_orthogonality() const {
         ortho_error_ = orthogonality_error();
         if (!(cfg.rtls_ortho_tol > 0) || ortho_error_ <= cfg.rtls_ortho_tol) return;
         linalg::Square Q;
@@ -188,23 +225,36 @@ private:
         ortho_error_ = orthogonality_error();
     }
 
+    // ||U^T U - I||_F (I on the first r columns) from the lower triangle of
+    // the symmetric U^T U: half the products of the whole, every sample.
     Real orthogonality_error() const {
-        MatU E = U_.transpose().lazyProduct(U_);
-        E.diagonal().head(rank_).array() -= Real(1);
-        return E.norm();
+        Real diag = 0, off = 0;
+        for (int j = 0; j < N1; ++j) {
+            const Real e = U_.col(j).squaredNorm() - (j < rank_ ? Real(1) : Real(0));
+            diag += e * e;
+            for (int i = j + 1; i < N1; ++i) {
+                const Real o = U_.col(i).dot(U_.col(j));
+                off += o * o;
+            }
+        }
+        return std::sqrt(diag + Real(2) * off);
     }
 
     const Vec6 d_;
     const Vec<N1> t_;
     Excitation<N> excitation_;
-    MatU U_;
-    Vec<N1> s_;
+    // estimate() applies the waiting blocks: the data M holds do not change,
+    // only how far its SVD has been brought up to date.
+    mutable MatU U_;
+    mutable Vec<N1> s_;
+    mutable Pending pending_;
+    mutable int pending_count_ = 0;
     Eigen::Matrix<Real, N1, kMaxInit> init_;
     int rank_ = 0;
     int init_count_ = 0;
     int64_t samples_ = 0;
-    int reorth_ = 0;
-    Real ortho_error_ = 0;
+    mutable int reorth_ = 0;
+    mutable Real ortho_error_ = 0;
 };
 
 }  // namespace loadid

@@ -13,13 +13,20 @@
  * Figures, each call timed alone with clock_gettime(CLOCK_MONOTONIC):
  *   RTLS update, RTLS update+estimate, RLS update, RIV update: the N-sample
  *     workload repeated R times (reset between repetitions) after one
- *     untimed warm-up repetition: median, 99.9th percentile, max;
+ *     untimed warm-up repetition: mean, median, 99.9th percentile, max.
+ *     RTLS takes samples into its SVD in blocks of up to 4 (rtls.hpp), so
+ *     an update alone mostly stores its sample (the median) and every 4th
+ *     runs the block (the tail): the mean is its cost per sample. With an
+ *     estimate after every update each block is one sample: that row is
+ *     the per-sample cost of the live loop at 1 kHz;
  *   TLS_BATCH estimate (QR + SVD over all stored rows, from scratch) at
  *     k = 100, 500, 1000 and N stored samples, repeated;
- *   the ratio TLS_BATCH estimate at N / RTLS update, both medians of this run;
+ *   the ratio TLS_BATCH estimate at N / RTLS update+estimate, both medians
+ *     of this run (each gives the estimate at sample N);
  *   the estimates after N samples (the work was real);
- *   the targets: RTLS update median <= 10 us, p99.9 <= 40 us, batch
- *     recomputation >= 100x an RTLS update.
+ *   the targets: RTLS update <= 10 us per sample (the mean), its p99.9
+ *     (a block of 4) <= 40 us, batch recomputation >= 100x an RTLS
+ *     update+estimate.
  * The RTLS update and the batch estimate at N are also timed on the thread's
  * CPU clock, which stops while the process is preempted: on a shared machine
  * the monotonic p99.9 and max measure the scheduler as much as the core, and
@@ -54,7 +61,7 @@
 static const char *prog = "bench_core";
 
 /* Targets of the real-time budget (1 kHz loop). */
-static const double kTargetMedianUs = 10.0;
+static const double kTargetMedianUs = 10.0; /* the RTLS update's mean per sample */
 static const double kTargetP999Us = 40.0;
 static const double kTargetRatio = 100.0;
 
@@ -194,6 +201,7 @@ static int cmp_i64(const void *a, const void *b) {
 
 typedef struct {
     long n;          /* timed calls */
+    double mean;     /* [us] */
     double median;   /* [us] */
     double p999;     /* 99.9th percentile, nearest rank [us] */
     double max;      /* [us] */
@@ -203,8 +211,11 @@ typedef struct {
 
 /* Sorts t (n durations in ns) in place. */
 static stats_t stats_of(int64_t *t, long n) {
-    stats_t s = {n, 0, 0, 0, 0};
+    stats_t s = {n, 0, 0, 0, 0, 0};
     if (n < 1) return s;
+    double sum = 0;
+    for (long i = 0; i < n; ++i) sum += (double)t[i];
+    s.mean = sum / (double)n * 1e-3;
     qsort(t, (size_t)n, sizeof *t, cmp_i64);
     s.median = (n % 2 ? (double)t[n / 2] : 0.5 * ((double)t[n / 2 - 1] + (double)t[n / 2])) * 1e-3;
     for (long i = n - 1; i >= 0 && (double)t[i] * 1e-3 > s.median + 1000.0; --i) ++s.slow;
@@ -342,7 +353,7 @@ static int run_batch(const workload_t *w, int have_cpu_clock, int64_t *buf, batc
 /* ------------------------------------------------------------- output -- */
 
 static void print_row(const char *name, const stats_t *s, const char *note) {
-    printf("  %-32s %9ld %11.3f %11.3f %11.3f", name, s->n, s->median, s->p999, s->max);
+    printf("  %-32s %9ld %11.3f %11.3f %11.3f %11.3f", name, s->n, s->mean, s->median, s->p999, s->max);
     if (note && note[0]) printf("  %s", note);
     if (s->slow) printf("%s%ld calls > median + 1 ms", note && note[0] ? "; " : "  ", s->slow);
     printf("\n");
@@ -504,7 +515,7 @@ int main(int argc, char **argv) {
 #else
     const int have_cpu_clock = 0;
 #endif
-    stats_t tov_cpu = {0, 0, 0, 0, 0};
+    stats_t tov_cpu = {0, 0, 0, 0, 0, 0};
 #ifdef CLOCK_THREAD_CPUTIME_ID
     if (have_cpu_clock) tov_cpu = timer_overhead(CLOCK_THREAD_CPUTIME_ID, buf, 100000);
 #endif
@@ -530,7 +541,7 @@ int main(int argc, char **argv) {
     }
 #endif
 
-    printf("  %-32s %9s %11s %11s %11s\n", "figure [us per call]", "calls", "median", "p99.9", "max");
+    printf("  %-32s %9s %11s %11s %11s %11s\n", "figure [us per call]", "calls", "mean", "median", "p99.9", "max");
     print_row("RTLS update", &rtls.st, NULL);
     print_row("RTLS update+estimate", &rtls_est.st, NULL);
     print_row("RLS update", &rls.st, NULL);
@@ -543,9 +554,9 @@ int main(int argc, char **argv) {
         print_row(name, &batch.st[p], note);
     }
     const stats_t *bN = &batch.st[batch.npoints - 1];
-    const double ratio = rtls.st.median > 0 ? bN->median / rtls.st.median : INFINITY;
-    printf("  %-32s %9s %11.1fx   (TLS_BATCH estimate @ k=%d %.3f us / RTLS update %.3f us)\n",
-           "ratio batch / RTLS (medians)", "", ratio, samples, bN->median, rtls.st.median);
+    const double ratio = rtls_est.st.median > 0 ? bN->median / rtls_est.st.median : INFINITY;
+    printf("  %-32s %9s %11.1fx   (TLS_BATCH estimate @ k=%d %.3f us / RTLS update+estimate %.3f us)\n",
+           "ratio batch / RTLS (medians)", "", ratio, samples, bN->median, rtls_est.st.median);
     if (have_cpu_clock) {
         /* The same on the thread's CPU clock, which stops while another
          * process runs: what the core costs when it has the CPU. */
@@ -555,8 +566,8 @@ int main(int argc, char **argv) {
             char name[64];
             snprintf(name, sizeof name, "TLS_BATCH estimate @ k=%d [CPU]", samples);
             print_row(name, &batch.cpu, NULL);
-            printf("  %-32s %9s %11.1fx\n", "ratio batch / RTLS [CPU]", "",
-                   rtls_cpu.st.median > 0 ? batch.cpu.median / rtls_cpu.st.median : INFINITY);
+            printf("  %-32s %9s %11.1fx   (TLS_BATCH median / RTLS update mean)\n", "ratio batch / RTLS [CPU]", "",
+                   rtls_cpu.st.mean > 0 ? batch.cpu.median / rtls_cpu.st.mean : INFINITY);
         }
     }
 
@@ -605,14 +616,16 @@ int main(int argc, char **argv) {
 
     printf("\n  targets (%s core):\n", loadid_scalar_is_float() ? "float" : "double");
     char label[64];
-    snprintf(label, sizeof label, "RTLS update median <= %.0f us", kTargetMedianUs);
-    printf("    %-36s : %10.3f us  %s\n", label, rtls.st.median, met(rtls.st.median <= kTargetMedianUs));
+    snprintf(label, sizeof label, "RTLS update mean <= %.0f us", kTargetMedianUs);
+    printf("    %-40s : %10.3f us  %s\n", label, rtls.st.mean, met(rtls.st.mean <= kTargetMedianUs));
     snprintf(label, sizeof label, "RTLS update p99.9 <= %.0f us", kTargetP999Us);
-    printf("    %-36s : %10.3f us  %s\n", label, rtls.st.p999, met(rtls.st.p999 <= kTargetP999Us));
+    printf("    %-40s : %10.3f us  %s\n", label, rtls.st.p999, met(rtls.st.p999 <= kTargetP999Us));
     snprintf(label, sizeof label, "batch TLS / RTLS @ k=%d >= %.0fx", samples, kTargetRatio);
-    printf("    %-36s : %10.1f x   %s\n", label, ratio, met(ratio >= kTargetRatio));
+    printf("    %-40s : %10.1f x   %s\n", label, ratio, met(ratio >= kTargetRatio));
+    printf("    (with an estimate after every update, as the live loop at 1 kHz: median %.3f us, p99.9 %.3f us)\n",
+           rtls_est.st.median, rtls_est.st.p999);
     if (have_cpu_clock)
-        printf("    (thread CPU clock, for reference: RTLS update median %.3f us, p99.9 %.3f us)\n", rtls_cpu.st.median,
+        printf("    (thread CPU clock, for reference: RTLS update mean %.3f us, p99.9 %.3f us)\n", rtls_cpu.st.mean,
                rtls_cpu.st.p999);
 
     free(buf);
