@@ -3,6 +3,8 @@
  * parsing rather than sscanf: sscanf's %llu accepts signs, skips blanks and
  * overflows silently, and a time must reach microseconds exactly.
  */
+#define _POSIX_C_SOURCE 200809L /* getc_unlocked */
+
 #include "loadid/candump.h"
 
 #include <errno.h>
@@ -312,13 +314,14 @@ long loadid_candump_reader_line(const loadid_candump_reader_t *r)
 /* Reads one line into r->buf (without its '\n'). Returns 1 for a line,
  * 0 at the end of the file, -EIO, or LOADID_CANDUMP_E_LONG_LINE (the rest
  * of the line is consumed). getc rather than fgets: a NUL byte must not
- * silently cut a line short. */
+ * silently cut a line short; getc_unlocked, as a reader has one thread:
+ * no lock taken per character. */
 static int read_line(loadid_candump_reader_t *r)
 {
     size_t n = 0;
     bool too_long = false, nul = false;
     int c;
-    while ((c = getc(r->fp)) != EOF && c != '\n') {
+    while ((c = getc_unlocked(r->fp)) != EOF && c != '\n') {
         if (c == '\0') {
             nul = true;
         } else if (n < LOADID_CANDUMP_LINE_MAX - 1) { /* room for the '\n' */
