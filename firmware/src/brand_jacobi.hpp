@@ -21,6 +21,7 @@
 #include <cmath>
 
 #include "eigen_types.hpp"
+#include "linalg.hpp"
 
 namespace loadid {
 
@@ -135,16 +136,7 @@ void brand_jacobi(const Vec<N1> &s, const Eigen::Matrix<Real, N1, C> &L,
     }
     for (int j = 0; j < N1; ++j) sv(j) = std::sqrt(weighted_norm2(j));
     U = X.template topRows<N1>();
-    // Descending order (selection sort: N1 <= 17).
-    for (int j = 0; j < N1 - 1; ++j) {
-        int best = j;
-        for (int k = j + 1; k < N1; ++k)
-            if (sv(k) > sv(best)) best = k;
-        if (best != j) {
-            std::swap(sv(j), sv(best));
-            U.col(j).swap(U.col(best));
-        }
-    }
+    linalg::sort_descending(U, sv, N1);
 }
 
 }  // namespace loadid

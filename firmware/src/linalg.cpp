@@ -69,19 +69,10 @@ void svd_left(const Work &M, Square &U, Values &s) {
         if (!rotated || t_max <= tiny) break;
         for (int j = 0; j < n; ++j) norm2(j) = X.col(j).squaredNorm();  // refresh the running norms
     }
-    // Sort by descending singular value (selection sort: n <= 17).
     s.resize(n);
     for (int j = 0; j < n; ++j) s(j) = X.col(j).norm();
     U = V;
-    for (int j = 0; j < n - 1; ++j) {
-        int best = j;
-        for (int k = j + 1; k < n; ++k)
-            if (s(k) > s(best)) best = k;
-        if (best != j) {
-            std::swap(s(j), s(best));
-            U.col(j).swap(U.col(best));
-        }
-    }
+    sort_descending(U, s, n);
 }
 
 void sym_eigenvalues(const Square &G, Values &lambda) {

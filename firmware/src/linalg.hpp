@@ -5,6 +5,8 @@
 // the core quick to build, and bounded storage keeps it off the heap.
 #pragma once
 
+#include <utility>
+
 #include "eigen_types.hpp"
 
 namespace loadid {
@@ -17,6 +19,21 @@ using Work = BoundedMat<kMaxDim, kMaxCols>;
 using Square = BoundedMat<kMaxDim, kMaxDim>;
 using Tall = BoundedMat<kMaxDim, LOADID_NROWS>;
 using Values = Eigen::Matrix<Real, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxDim, 1>;
+
+// Orders the first n values s descending, and the columns of U with them
+// (selection sort: n <= 17).
+template <class Mat, class Vals>
+void sort_descending(Mat &U, Vals &s, int n) {
+    for (int j = 0; j < n - 1; ++j) {
+        int best = j;
+        for (int k = j + 1; k < n; ++k)
+            if (s(k) > s(best)) best = k;
+        if (best != j) {
+            std::swap(s(j), s(best));
+            U.col(j).swap(U.col(best));
+        }
+    }
+}
 
 // M (rows <= cols) = U S V^T: U (rows x rows) and the singular values in
 // descending order (rows of them). V is not computed (eq. 30 needs U only).
