@@ -143,9 +143,9 @@ private:
     // padded with zero columns, which change nothing.
     void apply_pending() const {
         if (pending_count_ == 0) return;
-        if (pending_count_ <= 1)
+        if (pending_count_ == 1)
             apply_block<1>();
-        else if (pending_count_ <= 2)
+        else if (pending_count_ == 2)
             apply_block<2>();
         else
             apply_block<kBlock>();
@@ -157,7 +157,7 @@ private:
     void apply_block() const {
         constexpr int C = LOADID_NROWS * B;
         const int used = LOADID_NROWS * pending_count_;
-        pending_.middleCols(used, LOADID_NROWS * kBlock - used).setZero();
+        pending_.middleCols(used, C - used).setZero();
         const Eigen::Matrix<Real, N1, C> L = U_.transpose().lazyProduct(pending_.template leftCols<C>());
         MatU Uz;
         Vec<N1> sz;
@@ -172,31 +172,29 @@ private:
         Block L = U_.transpose().lazyProduct(Nk);  // eq. (27); rows >= r are 0
         MatU basis = U_;                // [U_k J_k], eq. (34)
         linalg::Work Z = linalg::Work::Zero(N1, N1 + LOADID_NROWS);  // eq. (29), zero-padded
+        // Eq. (28): the part of N_k outside span(U), projected twice
+        // (classical Gram-Schmidt with re-orthogonalisation).
+        Block H = Nk - U_.lazyProduct(L);
+        const Block L2 = U_.transpose().lazyProduct(H);
+        L += L2;
+        H -= U_.lazyProduct(L2);
+        // Eq. (31) asks whether the volume of H orthogonal to U is zero.
+        // A rank-revealing QR answers it column by column: the leading p
+        // columns with |G_ii| above the tolerance have non-zero volume
+        // and extend U (eqs. 34-35); p = 0 is the paper's v < eps branch
+        // (eqs. 32-33). Brand (2002) keeps exactly this numerical rank.
+        linalg::Square Q;
+        linalg::Tall R;
+        Eigen::Matrix<int, LOADID_NROWS, 1> perm;
+        linalg::colpiv_qr(linalg::Tall(H), Q, R, perm);
+        const Real tol = rank_tol(std::max(s_(0), Nk.norm()));
+        const int pmax = std::min(LOADID_NROWS, N1 - rank_);
         int p = 0;
-        if (rank_ < N1) {
-            // Eq. (28): the part of N_k outside span(U), projected twice
-            // (classical Gram-Schmidt with re-orthogonalisation).
-            Block H = Nk - U_.lazyProduct(L);
-            const Block L2 = U_.transpose().lazyProduct(H);
-            L += L2;
-            H -= U_.lazyProduct(L2);
-            // Eq. (31) asks whether the volume of H orthogonal to U is zero.
-            // A rank-revealing QR answers it column by column: the leading p
-            // columns with |G_ii| above the tolerance have non-zero volume
-            // and extend U (eqs. 34-35); p = 0 is the paper's v < eps branch
-            // (eqs. 32-33). Brand (2002) keeps exactly this numerical rank.
-            linalg::Square Q;
-            linalg::Tall R;
-            Eigen::Matrix<int, LOADID_NROWS, 1> perm;
-            linalg::colpiv_qr(linalg::Tall(H), Q, R, perm);
-            const Real tol = rank_tol(std::max(s_(0), Nk.norm()));
-            const int pmax = std::min(LOADID_NROWS, N1 - rank_);
-            while (p < pmax && std::abs(R(p, p)) > tol) ++p;
-            if (p > 0) {
-                basis.middleCols(rank_, p) = Q.leftCols(p);
-                for (int j = 0; j < LOADID_NROWS; ++j)
-                    for (int i = 0; i < p; ++i) Z(rank_ + i, N1 + perm(j)) = R(i, j);  // G_k = R P^T
-            }
+        while (p < pmax && std::abs(R(p, p)) > tol) ++p;
+        if (p > 0) {
+            basis.middleCols(rank_, p) = Q.leftCols(p);
+            for (int j = 0; j < LOADID_NROWS; ++j)
+                for (int i = 0; i < p; ++i) Z(rank_ + i, N1 + perm(j)) = R(i, j);  // G_k = R P^T
         }
         Z.topLeftCorner(N1, N1).diagonal() = s_;           // S_k
         Z.template rightCols<LOADID_NROWS>().topRows(rank_) = L.topRows(rank_);  // L_k
@@ -226,7 +224,7 @@ private:
     }
 
     // ||U^T U - I||_F (I on the first r columns) from the lower triangle of
-    // the symmetric U^T U: half the products of the whole, every sample.
+    // the symmetric U^T U: half the products of the whole, once an update.
     Real orthogonality_error() const {
         Real diag = 0, off = 0;
         for (int j = 0; j < N1; ++j) {
