@@ -5,8 +5,10 @@ collected by pytest)."""
 
 from __future__ import annotations
 
+import importlib
 import select
 import subprocess
+import sys
 import time
 
 import lcm
@@ -29,6 +31,19 @@ def recording_streams(rec):
         first_can = int(sec) * 1_000_000 + int(usec)
     events = [(ev.timestamp, ev.channel, ev.data) for ev in lcm.EventLog(f"{rec}/lcm.log", "r")]
     return first_can, events
+
+
+def open_session(pydir, rec):
+    """What every live session starts with: lcm-gen's Python types (from
+    pydir), the loopback multicast, the recording's streams, an LCM handle
+    and the daemon's outputs subscribed. Returns (types, first_can, events,
+    lc, outputs)."""
+    sys.path.insert(0, pydir)
+    types = importlib.import_module("loadid")
+    loopback_multicast()
+    first_can, events = recording_streams(rec)
+    lc = lcm.LCM(URL)
+    return types, first_can, events, lc, Outputs(lc, types)
 
 
 class Outputs:

@@ -23,21 +23,13 @@ import sys
 import tempfile
 import time
 
-import lcm
-
-from lcm_loopback import URL, Outputs, loopback_multicast, recording_streams
+from lcm_loopback import open_session
 
 
 def main():
     loadidd, config, rec, pydir, cli = sys.argv[1:6]
     with_commands = len(sys.argv) < 7 or sys.argv[6] != "no-commands"
-    sys.path.insert(0, pydir)
-    import loadid  # lcm-gen's Python types
-
-    loopback_multicast()
-    first_can, events = recording_streams(rec)
-    lc = lcm.LCM(URL)
-    out = Outputs(lc, loadid)
+    loadid, first_can, events, lc, out = open_session(pydir, rec)  # lcm-gen's types as loadid
     got = out.got
 
     # systemd's side of Type=notify: a datagram socket in NOTIFY_SOCKET.

@@ -26,9 +26,7 @@ import subprocess
 import sys
 import time
 
-import lcm
-
-from lcm_loopback import URL, Outputs, loopback_multicast, recording_streams
+from lcm_loopback import open_session
 
 
 def start_sim(sim, *args):
@@ -41,13 +39,7 @@ def start_sim(sim, *args):
 
 def main():
     loadidd, sim, config, rec, pydir, link = sys.argv[1:7]
-    sys.path.insert(0, pydir)
-    import loadid  # lcm-gen's Python types
-
-    loopback_multicast()
-    first_can, events = recording_streams(rec)
-    lc = lcm.LCM(URL)
-    out = Outputs(lc, loadid)
+    loadid, first_can, events, lc, out = open_session(pydir, rec)  # lcm-gen's types as loadid
     got = out.got
     pump = out.pump
 

@@ -44,13 +44,20 @@ def run_session(cfg, recording, *extra):
     return out
 
 
-@pytest.fixture(scope="module")
-def session(recording, tmp_path_factory):
-    d = tmp_path_factory.mktemp("live")
+def live_config(d):
+    """The live session's configuration in folder d: loopback LCM, results
+    saved in d/results, SCHED_FIFO 10 with mlockall on CPU 0."""
     cfg = d / "c.yaml"
     cfg.write_text("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n"
                    f"results:\n  directory: {d / 'results'}\n"
                    "realtime:\n  priority: 10\n  lock_memory: true\n  cpu: 0\n")
+    return cfg
+
+
+@pytest.fixture(scope="module")
+def session(recording, tmp_path_factory):
+    d = tmp_path_factory.mktemp("live")
+    cfg = live_config(d)
     out = run_session(cfg, recording)
     out["results"] = d / "results"
     return out

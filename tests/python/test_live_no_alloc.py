@@ -24,7 +24,7 @@ import subprocess
 import pytest
 
 from recordings import program
-from test_live_lcm import run_session
+from test_live_lcm import live_config, run_session
 from test_live_modbus import run_modbus_session
 
 
@@ -48,10 +48,7 @@ def counted(d, run):
 @pytest.fixture(scope="module")
 def session(recording, tmp_path_factory):
     d = tmp_path_factory.mktemp("live_no_alloc")
-    cfg = d / "c.yaml"
-    cfg.write_text("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n"
-                   f"results:\n  directory: {d / 'results'}\n"
-                   "realtime:\n  priority: 10\n  lock_memory: true\n  cpu: 0\n")
+    cfg = live_config(d)
     out = counted(d, lambda: run_session(cfg, recording))
     out["results"] = d / "results"
     return out
