@@ -399,7 +399,7 @@ static void check_invariant(const loadid_modbus_ft_stats_t *st)
 static int setup_dir(void **state)
 {
     (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/loadid_test_modbus_XXXXXX");
+    snprintf(g_dir, sizeof g_dir, "/tmp/loadid_test_modbus_XXXXXX"); /* mkdtemp template */
     if (!mkdtemp(g_dir)) return -1;
     snprintf(g_link, sizeof g_link, "%s/ft", g_dir);
     return 0;

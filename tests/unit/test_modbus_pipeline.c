@@ -36,7 +36,7 @@ static char g_file[256];
 static int setup_dir(void **state)
 {
     (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/loadid_test_modbus_cfg_XXXXXX");
+    snprintf(g_dir, sizeof g_dir, "/tmp/loadid_test_modbus_cfg_XXXXXX"); /* mkdtemp template */
     if (!mkdtemp(g_dir)) return -1;
     snprintf(g_file, sizeof g_file, "%s/c.yaml", g_dir);
     return 0;
