@@ -95,18 +95,32 @@ static const member_t kStatus[] = {
     {"loop_us_p99", "double", NULL, 0},
     {"loop_us_max", "double", NULL, 0},
 };
+static const member_t kLoadModel[] = {
+    {"utime", "int64_t", NULL, 0},
+    {"method", "int8_t", NULL, 0},
+    {"load_name", "string", NULL, 0},
+    {"identified", "int8_t", NULL, 0},
+    {"projected", "boolean", NULL, 0},
+    {"phi", "double", "10", 0},
+    {"phi_std", "double", "10", 0},
+    {"mass", "double", NULL, 0},
+    {"com", "double", "3", 0},
+    {"inertia_com", "double", "6", 0},
+};
 
 #define N(a) ((int)(sizeof(a) / sizeof((a)[0])))
 
 uint64_t loadid_lcm_fingerprint(loadid_lcm_type_t type) {
     /* Computed once per type (a few hundred operations, no allocation). */
-    static uint64_t cache[5];
-    static int have[5];
-    static const member_t *const members[5] = {kJointState, kCommand, kEstimate, kWrench, kStatus};
-    static const int counts[5] = {N(kJointState), N(kCommand), N(kEstimate), N(kWrench),
-                                  N(kStatus)};
+    enum { NTYPES = 6 };
+    static uint64_t cache[NTYPES];
+    static int have[NTYPES];
+    static const member_t *const members[NTYPES] = {kJointState, kCommand, kEstimate,
+                                                    kWrench,     kStatus,  kLoadModel};
+    static const int counts[NTYPES] = {N(kJointState), N(kCommand), N(kEstimate),
+                                       N(kWrench),     N(kStatus),  N(kLoadModel)};
     const unsigned t = (unsigned)type;
-    if (t >= 5) return 0;
+    if (t >= NTYPES) return 0;
     if (!have[t]) cache[t] = struct_hash(members[t], counts[t]), have[t] = 1;
     return cache[t];
 }
@@ -228,6 +242,21 @@ int loadid_lcm_encode_status(const loadid_lcm_status_t *m, uint8_t *buf, size_t 
     put_f64s(&w, &m->loop_us_p50, 1);
     put_f64s(&w, &m->loop_us_p99, 1);
     put_f64s(&w, &m->loop_us_max, 1);
+    return finish(&w);
+}
+
+int loadid_lcm_encode_load_model(const loadid_lcm_load_model_t *m, uint8_t *buf, size_t cap) {
+    wr_t w = writer(LOADID_LCM_LOAD_MODEL, buf, cap);
+    put_i64(&w, m->utime);
+    put_i8(&w, m->method);
+    if (put_string(&w, m->load_name, sizeof m->load_name)) return LOADID_LCM_EINVAL;
+    put_i8(&w, m->identified);
+    put_i8(&w, m->projected);
+    put_f64s(&w, m->phi, 10);
+    put_f64s(&w, m->phi_std, 10);
+    put_f64s(&w, &m->mass, 1);
+    put_f64s(&w, m->com, 3);
+    put_f64s(&w, m->inertia_com, 6);
     return finish(&w);
 }
 
@@ -365,6 +394,21 @@ int loadid_lcm_decode_status(const uint8_t *buf, size_t len, loadid_lcm_status_t
     get_f64s(&r, &out->loop_us_p50, 1);
     get_f64s(&r, &out->loop_us_p99, 1);
     get_f64s(&r, &out->loop_us_max, 1);
+    return done(&r);
+}
+
+int loadid_lcm_decode_load_model(const uint8_t *buf, size_t len, loadid_lcm_load_model_t *out) {
+    rd_t r = reader(LOADID_LCM_LOAD_MODEL, buf, len);
+    out->utime = get_i64(&r);
+    out->method = get_i8(&r);
+    get_string(&r, out->load_name, sizeof out->load_name);
+    out->identified = get_i8(&r);
+    out->projected = get_i8(&r);
+    get_f64s(&r, out->phi, 10);
+    get_f64s(&r, out->phi_std, 10);
+    get_f64s(&r, &out->mass, 1);
+    get_f64s(&r, out->com, 3);
+    get_f64s(&r, out->inertia_com, 6);
     return done(&r);
 }
 

@@ -28,7 +28,7 @@ import subprocess
 import pytest
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[2]
-TYPES = ["joint_state_t", "command_t", "estimate_t", "wrench_t", "status_t"]
+TYPES = ["joint_state_t", "command_t", "estimate_t", "wrench_t", "status_t", "load_model_t"]
 
 
 @pytest.fixture(scope="module")
@@ -94,8 +94,20 @@ def python_instances(t):
     st.loop_us_p50 = 12.5
     st.loop_us_p99 = 40.25
     st.loop_us_max = 99.75
+
+    lm = t.load_model_t()
+    lm.utime = 8
+    lm.method = t.estimate_t.REFINED
+    lm.load_name = "o1 model"
+    lm.identified = t.load_model_t.MASS | t.load_model_t.COM
+    lm.projected = True
+    lm.phi = [0.75 - i for i in range(10)]
+    lm.phi_std = [0.015625 * (i + 1) for i in range(10)]
+    lm.mass = 0.75
+    lm.com = [-0.125, 0.25, 0.5]
+    lm.inertia_com = [0.002 * (6 - i) for i in range(6)]
     return {"joint_state_t": js, "command_t": cmd, "estimate_t": est, "wrench_t": w,
-            "status_t": st}
+            "status_t": st, "load_model_t": lm}
 
 
 def fields(msg) -> dict:
@@ -122,6 +134,8 @@ def test_c_and_python_bytes_match(lcmtypes, c_output, type_name):
     got = fields(decoded)
     if type_name == "estimate_t":
         got["physically_consistent"] = bool(got["physically_consistent"])
+    if type_name == "load_model_t":
+        got["projected"] = bool(got["projected"])
     assert got == want
     # A message of another type is refused, not misread.
     other = msgs["wrench_t" if type_name != "wrench_t" else "status_t"][1]
@@ -131,7 +145,7 @@ def test_c_and_python_bytes_match(lcmtypes, c_output, type_name):
 
 def test_constants_match(lcmtypes, c_output):
     _, consts = c_output
-    assert len(consts) == 14
+    assert len(consts) == 18
     for (type_name, name), value in consts.items():
         assert getattr(getattr(lcmtypes, type_name), name) == value
 

@@ -17,6 +17,7 @@
 #include "lcmtypes/loadid_command_t.h"
 #include "lcmtypes/loadid_estimate_t.h"
 #include "lcmtypes/loadid_joint_state_t.h"
+#include "lcmtypes/loadid_load_model_t.h"
 #include "lcmtypes/loadid_status_t.h"
 #include "lcmtypes/loadid_wrench_t.h"
 
@@ -96,6 +97,27 @@ int main(void)
                           .loop_us_max = 99.75};
     ENCODE(status_t, st);
 
+    char model_name[] = "o1 model";
+    loadid_load_model_t lm;
+    memset(&lm, 0, sizeof lm);
+    lm.utime = 8;
+    lm.method = LOADID_ESTIMATE_T_REFINED;
+    lm.load_name = model_name;
+    lm.identified = LOADID_LOAD_MODEL_T_MASS | LOADID_LOAD_MODEL_T_COM;
+    lm.projected = 1;
+    for (int i = 0; i < 10; ++i) {
+        lm.phi[i] = 0.75 - i;
+        lm.phi_std[i] = 0.015625 * (i + 1);
+    }
+    lm.mass = 0.75;
+    lm.com[0] = -0.125;
+    lm.com[1] = 0.25;
+    lm.com[2] = 0.5;
+    for (int i = 0; i < 6; ++i) {
+        lm.inertia_com[i] = 0.002 * (6 - i);
+    }
+    ENCODE(load_model_t, lm);
+
     printf("const command_t ZERO %d\n", LOADID_COMMAND_T_ZERO);
     printf("const command_t START %d\n", LOADID_COMMAND_T_START);
     printf("const command_t STOP %d\n", LOADID_COMMAND_T_STOP);
@@ -105,10 +127,14 @@ int main(void)
     printf("const estimate_t RTLS %d\n", LOADID_ESTIMATE_T_RTLS);
     printf("const estimate_t LS_BATCH %d\n", LOADID_ESTIMATE_T_LS_BATCH);
     printf("const estimate_t TLS_BATCH %d\n", LOADID_ESTIMATE_T_TLS_BATCH);
+    printf("const estimate_t REFINED %d\n", LOADID_ESTIMATE_T_REFINED);
     printf("const estimate_t IDLE %d\n", LOADID_ESTIMATE_T_IDLE);
     printf("const estimate_t ZEROING %d\n", LOADID_ESTIMATE_T_ZEROING);
     printf("const estimate_t ESTIMATING %d\n", LOADID_ESTIMATE_T_ESTIMATING);
     printf("const estimate_t DONE %d\n", LOADID_ESTIMATE_T_DONE);
     printf("const estimate_t FAILED %d\n", LOADID_ESTIMATE_T_FAILED);
+    printf("const load_model_t MASS %d\n", LOADID_LOAD_MODEL_T_MASS);
+    printf("const load_model_t COM %d\n", LOADID_LOAD_MODEL_T_COM);
+    printf("const load_model_t INERTIA %d\n", LOADID_LOAD_MODEL_T_INERTIA);
     return fflush(stdout) == 0 ? 0 : 1;
 }

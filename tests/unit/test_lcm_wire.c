@@ -8,7 +8,7 @@
  *    bytes decode to the same fields, and ours decode with lcm-gen's
  *    decoder;
  *  - truncated (every prefix), oversized, wrong-fingerprint, bad-count
- *    and bad-string inputs are refused with their codes; each decode reads
+ *    and bad-string inputs (command_t's and load_model_t's strings) are refused with their codes; each decode reads
  *    an exact-size heap copy, so the sanitizers see any read past it;
  *  - encoders refuse buffers too small and fields out of range;
  *  - the udpm framing (lcm_udpm.h): URL and datagram parsing.
@@ -28,6 +28,7 @@
 #include "lcmtypes/loadid_command_t.h"
 #include "lcmtypes/loadid_estimate_t.h"
 #include "lcmtypes/loadid_joint_state_t.h"
+#include "lcmtypes/loadid_load_model_t.h"
 #include "lcmtypes/loadid_status_t.h"
 #include "lcmtypes/loadid_wrench_t.h"
 #include "loadid/lcm_udpm.h"
@@ -88,6 +89,7 @@ WRAP(command)
 WRAP(estimate)
 WRAP(wrench)
 WRAP(status)
+WRAP(load_model)
 
 static void test_fingerprints(void **state) {
     (void)state;
@@ -98,7 +100,9 @@ static void test_fingerprints(void **state) {
                 (uint64_t)__loadid_estimate_t_get_hash());
     assert_true(loadid_lcm_fingerprint(LOADID_LCM_WRENCH) == (uint64_t)__loadid_wrench_t_get_hash());
     assert_true(loadid_lcm_fingerprint(LOADID_LCM_STATUS) == (uint64_t)__loadid_status_t_get_hash());
-    assert_true(loadid_lcm_fingerprint((loadid_lcm_type_t)5) == 0);
+    assert_true(loadid_lcm_fingerprint(LOADID_LCM_LOAD_MODEL) ==
+                (uint64_t)__loadid_load_model_t_get_hash());
+    assert_true(loadid_lcm_fingerprint((loadid_lcm_type_t)6) == 0);
 }
 
 /* Every refusal a message of n bytes must give: each shorter prefix, one
@@ -432,11 +436,124 @@ static void test_status(void **state) {
     }
 }
 
+/* ---- load_model_t ---- */
+/* lcm-gen's struct with m's fields (its load_name points into m). */
+static loadid_load_model_t gen_load_model(loadid_lcm_load_model_t *m) {
+    loadid_load_model_t g;
+    memset(&g, 0, sizeof g);
+    g.utime = m->utime, g.method = m->method, g.load_name = m->load_name;
+    g.identified = m->identified, g.projected = m->projected;
+    memcpy(g.phi, m->phi, sizeof g.phi), memcpy(g.phi_std, m->phi_std, sizeof g.phi_std);
+    g.mass = m->mass;
+    memcpy(g.com, m->com, sizeof g.com), memcpy(g.inertia_com, m->inertia_com, sizeof g.inertia_com);
+    return g;
+}
+
+static void test_load_model(void **state) {
+    (void)state;
+    for (int r = 0; r < ROUNDS; ++r) {
+        loadid_lcm_load_model_t m;
+        memset(&m, 0, sizeof m);
+        m.utime = rnd_i64();
+        m.method = rnd_i8();
+        rnd_name(m.load_name);
+        if (r == 0) m.load_name[0] = 0;
+        m.identified = rnd_i8();
+        m.projected = (int8_t)(rnd() % 2);
+        rnd_doubles(m.phi, 10), rnd_doubles(m.phi_std, 10), rnd_doubles(&m.mass, 1);
+        rnd_doubles(m.com, 3), rnd_doubles(m.inertia_com, 6);
+        loadid_load_model_t g = gen_load_model(&m);
+        uint8_t ours[LOADID_LCM_LOAD_MODEL_MAX], gen[1024];
+        const int n = loadid_lcm_encode_load_model(&m, ours, sizeof ours);
+        const int gn = loadid_load_model_t_encode(gen, 0, sizeof gen, &g);
+        assert_int_equal(n, gn);
+        assert_int_equal(n, loadid_load_model_t_encoded_size(&g));
+        assert_memory_equal(ours, gen, (size_t)n);
+        loadid_lcm_load_model_t d;
+        const int rc = decode_copy(dec_load_model, gen, (size_t)gn, &d);
+        const int nonfinite = any_nonfinite(m.phi, 10) || any_nonfinite(m.phi_std, 10) ||
+                              any_nonfinite(&m.mass, 1) || any_nonfinite(m.com, 3) ||
+                              any_nonfinite(m.inertia_com, 6);
+        assert_int_equal(rc, nonfinite ? LOADID_LCM_NONFINITE : 0);
+        assert_true(d.utime == m.utime && d.method == m.method && d.identified == m.identified &&
+                    d.projected == m.projected);
+        assert_string_equal(d.load_name, m.load_name);
+        assert_true(same_bits(d.phi, m.phi, 10) && same_bits(d.phi_std, m.phi_std, 10));
+        assert_true(same_bits(&d.mass, &m.mass, 1) && same_bits(d.com, m.com, 3));
+        assert_true(same_bits(d.inertia_com, m.inertia_com, 6));
+        loadid_load_model_t gd;
+        assert_int_equal(loadid_load_model_t_decode(ours, 0, n, &gd), n);
+        assert_true(gd.utime == m.utime && gd.method == m.method &&
+                    gd.identified == m.identified && gd.projected == m.projected);
+        assert_string_equal(gd.load_name, m.load_name);
+        assert_true(same_bits(gd.phi, m.phi, 10) && same_bits(gd.phi_std, m.phi_std, 10));
+        assert_true(same_bits(&gd.mass, &m.mass, 1) && same_bits(gd.com, m.com, 3));
+        assert_true(same_bits(gd.inertia_com, m.inertia_com, 6));
+        loadid_load_model_t_decode_cleanup(&gd);
+        if (r < 20) {
+            refuse_damaged(dec_load_model, ours, (size_t)n, &d);
+            refuse_small(enc_load_model, &m, n);
+        }
+    }
+}
+
+/* load_model_t's string (after utime and method, at byte 17): the refusals
+ * of test_command_strings, on this decoder. */
+static void test_load_model_strings(void **state) {
+    (void)state;
+    loadid_lcm_load_model_t m, d;
+    memset(&m, 0, sizeof m);
+    strcpy(m.load_name, "xyz");
+    uint8_t ok[LOADID_LCM_LOAD_MODEL_MAX], b[LOADID_LCM_LOAD_MODEL_MAX + 8];
+    const int n = loadid_lcm_encode_load_model(&m, ok, sizeof ok);
+    assert_int_equal(n, 8 + 8 + 1 + 4 + 4 + 1 + 1 + 8 * 30);
+    assert_int_equal(LOADID_LCM_LOAD_MODEL_MAX, n - 4 + LOADID_LCM_NAME_MAX);
+    assert_int_equal(decode_copy(dec_load_model, ok, (size_t)n, &d), 0);
+    assert_string_equal(d.load_name, "xyz");
+    assert_true(ok[17] == 0 && ok[18] == 0 && ok[19] == 0 && ok[20] == 4);
+    /* unterminated, a NUL inside, length 0, negative */
+    memcpy(b, ok, (size_t)n);
+    b[24] = 'w';
+    assert_int_equal(decode_copy(dec_load_model, b, (size_t)n, &d), LOADID_LCM_ESTRING);
+    memcpy(b, ok, (size_t)n);
+    b[22] = 0;
+    assert_int_equal(decode_copy(dec_load_model, b, (size_t)n, &d), LOADID_LCM_ESTRING);
+    memcpy(b, ok, (size_t)n);
+    b[20] = 0;
+    assert_int_equal(decode_copy(dec_load_model, b, (size_t)n, &d), LOADID_LCM_ESTRING);
+    memcpy(b, ok, (size_t)n);
+    b[17] = 0x80;
+    assert_int_equal(decode_copy(dec_load_model, b, (size_t)n, &d), LOADID_LCM_ESTRING);
+    /* a length beyond the buffer */
+    memcpy(b, ok, (size_t)n);
+    b[17] = 0x7f;
+    assert_int_equal(decode_copy(dec_load_model, b, (size_t)n, &d), LOADID_LCM_ESHORT);
+    /* the longest name: 127 characters; lcm-gen writes 128, ours refuses both ways */
+    memset(m.load_name, 'n', sizeof m.load_name - 1);
+    m.load_name[sizeof m.load_name - 1] = 0;
+    const int nmax = loadid_lcm_encode_load_model(&m, ok, sizeof ok);
+    assert_int_equal(nmax, LOADID_LCM_LOAD_MODEL_MAX);
+    assert_int_equal(decode_copy(dec_load_model, ok, (size_t)nmax, &d), 0);
+    assert_int_equal((int)strlen(d.load_name), 127);
+    char long_name[LOADID_LCM_NAME_MAX + 1];
+    memset(long_name, 'n', LOADID_LCM_NAME_MAX);
+    long_name[LOADID_LCM_NAME_MAX] = 0;
+    loadid_load_model_t g = gen_load_model(&m);
+    g.load_name = long_name;
+    uint8_t gen[1024];
+    const int gn = loadid_load_model_t_encode(gen, 0, sizeof gen, &g);
+    assert_int_equal(gn, LOADID_LCM_LOAD_MODEL_MAX + 1);
+    assert_int_equal(decode_copy(dec_load_model, gen, (size_t)gn, &d), LOADID_LCM_ESTRING);
+    memset(m.load_name, 'n', sizeof m.load_name); /* no NUL within the array */
+    assert_int_equal(loadid_lcm_encode_load_model(&m, ok, sizeof ok), LOADID_LCM_EINVAL);
+}
+
 /* A message of one type is refused by every other type's decoder. */
 static void test_types_not_confused(void **state) {
     (void)state;
-    uint8_t b[5][LOADID_LCM_ESTIMATE_MAX];
-    int n[5];
+    enum { NT = 6 };
+    uint8_t b[NT][LOADID_LCM_LOAD_MODEL_MAX];
+    int n[NT];
     loadid_lcm_joint_state_t js = {1, 2, {0}, {0}};
     loadid_lcm_command_t c = {1, 2, "x"};
     loadid_lcm_estimate_t e;
@@ -444,23 +561,26 @@ static void test_types_not_confused(void **state) {
     loadid_lcm_wrench_t w = {1, {0}, {0}};
     loadid_lcm_status_t s;
     memset(&s, 0, sizeof s);
+    loadid_lcm_load_model_t lm;
+    memset(&lm, 0, sizeof lm);
     n[0] = loadid_lcm_encode_joint_state(&js, b[0], sizeof b[0]);
     n[1] = loadid_lcm_encode_command(&c, b[1], sizeof b[1]);
     n[2] = loadid_lcm_encode_estimate(&e, b[2], sizeof b[2]);
     n[3] = loadid_lcm_encode_wrench(&w, b[3], sizeof b[3]);
     n[4] = loadid_lcm_encode_status(&s, b[4], sizeof b[4]);
-    const decode_fn dec[5] = {dec_joint_state, dec_command,
-                              dec_estimate, dec_wrench,
-                              dec_status};
+    n[5] = loadid_lcm_encode_load_model(&lm, b[5], sizeof b[5]);
+    const decode_fn dec[NT] = {dec_joint_state, dec_command, dec_estimate,
+                               dec_wrench,      dec_status,  dec_load_model};
     union {
         loadid_lcm_joint_state_t js;
         loadid_lcm_command_t c;
         loadid_lcm_estimate_t e;
         loadid_lcm_wrench_t w;
         loadid_lcm_status_t s;
+        loadid_lcm_load_model_t lm;
     } out;
-    for (int i = 0; i < 5; ++i)
-        for (int j = 0; j < 5; ++j)
+    for (int i = 0; i < NT; ++i)
+        for (int j = 0; j < NT; ++j)
             assert_int_equal(decode_copy(dec[j], b[i], (size_t)n[i], &out),
                              i == j ? 0 : LOADID_LCM_EFINGERPRINT);
     for (int code = LOADID_LCM_EINVAL; code <= LOADID_LCM_NONFINITE; ++code)
@@ -532,6 +652,7 @@ int main(void) {
         cmocka_unit_test(test_joint_state_counts), cmocka_unit_test(test_command),
         cmocka_unit_test(test_command_strings),   cmocka_unit_test(test_estimate),
         cmocka_unit_test(test_wrench),            cmocka_unit_test(test_status),
+        cmocka_unit_test(test_load_model),        cmocka_unit_test(test_load_model_strings),
         cmocka_unit_test(test_types_not_confused), cmocka_unit_test(test_udpm_url),
         cmocka_unit_test(test_udpm_datagrams),
     };

@@ -1,5 +1,5 @@
 /*
- * The five LCM types of DESIGN.md (proto/<type>.lcm, package loadid) on the
+ * The six LCM types of DESIGN.md (proto/<type>.lcm, package loadid) on the
  * wire, hand-written on fixed buffers: encode into a caller's buffer,
  * decode a received buffer into fixed-size structs. Nothing here allocates
  * (the loop of loadidd uses these instead of lcm-gen's C, whose *_publish
@@ -43,6 +43,7 @@ extern "C" {
 #define LOADID_LCM_ESTIMATE_MAX (8 + 8 + 8 + 1 + 1 + 4 + LOADID_LCM_NAME_MAX + 8 * 28 + 1)
 #define LOADID_LCM_WRENCH_SIZE (8 + 8 + 8 * 6)
 #define LOADID_LCM_STATUS_SIZE (8 + 8 + 1 + 8 * 6 + 8 * 3)
+#define LOADID_LCM_LOAD_MODEL_MAX (8 + 8 + 1 + 4 + LOADID_LCM_NAME_MAX + 1 + 1 + 8 * 30)
 
 /* Return codes (a private range, loadid_lcm_strerror). */
 enum {
@@ -61,7 +62,8 @@ typedef enum {
     LOADID_LCM_COMMAND,
     LOADID_LCM_ESTIMATE,
     LOADID_LCM_WRENCH,
-    LOADID_LCM_STATUS
+    LOADID_LCM_STATUS,
+    LOADID_LCM_LOAD_MODEL
 } loadid_lcm_type_t;
 
 typedef struct {
@@ -107,6 +109,20 @@ typedef struct {
     double loop_us_p50, loop_us_p99, loop_us_max; /* [us] */
 } loadid_lcm_status_t;
 
+/* load_model_t, channel LOADID_MODEL: the load a controller should use. */
+typedef struct {
+    int64_t utime;                /* [us] newest sample used */
+    int8_t method;                /* the estimate it was made from: RLS 1 .. REFINED 6 */
+    char load_name[LOADID_LCM_NAME_MAX];
+    int8_t identified;            /* bits MASS 1 | COM 2 | INERTIA 4: the groups determined */
+    int8_t projected;             /* LCM boolean: phi differs from the method's estimate */
+    double phi[10];               /* eq. (5), physically consistent [kg, kg m, kg m^2] */
+    double phi_std[10];           /* one standard deviation of the estimate's elements */
+    double mass;                  /* [kg] */
+    double com[3];                /* [m], in S */
+    double inertia_com[6];        /* [kg m^2] about the COM, axes of S */
+} loadid_lcm_load_model_t;
+
 /* The type's 8-byte fingerprint as lcm-gen computes it (the first 8 bytes
  * of every message, big-endian). */
 uint64_t loadid_lcm_fingerprint(loadid_lcm_type_t type);
@@ -120,6 +136,7 @@ int loadid_lcm_encode_command(const loadid_lcm_command_t *m, uint8_t *buf, size_
 int loadid_lcm_encode_estimate(const loadid_lcm_estimate_t *m, uint8_t *buf, size_t cap);
 int loadid_lcm_encode_wrench(const loadid_lcm_wrench_t *m, uint8_t *buf, size_t cap);
 int loadid_lcm_encode_status(const loadid_lcm_status_t *m, uint8_t *buf, size_t cap);
+int loadid_lcm_encode_load_model(const loadid_lcm_load_model_t *m, uint8_t *buf, size_t cap);
 
 /* Decoders: buf holds exactly one message of len bytes. Return 0,
  * LOADID_LCM_NONFINITE (decoded; a double is not finite), or a negative
@@ -129,6 +146,7 @@ int loadid_lcm_decode_command(const uint8_t *buf, size_t len, loadid_lcm_command
 int loadid_lcm_decode_estimate(const uint8_t *buf, size_t len, loadid_lcm_estimate_t *out);
 int loadid_lcm_decode_wrench(const uint8_t *buf, size_t len, loadid_lcm_wrench_t *out);
 int loadid_lcm_decode_status(const uint8_t *buf, size_t len, loadid_lcm_status_t *out);
+int loadid_lcm_decode_load_model(const uint8_t *buf, size_t len, loadid_lcm_load_model_t *out);
 
 /* A one-line description of a return code above. */
 const char *loadid_lcm_strerror(int code);
