@@ -15,6 +15,7 @@
 #include "givens_qr.hpp"
 #include "linalg.hpp"
 #include "tls_solution.hpp"
+#include "uncertainty.hpp"
 
 namespace loadid {
 
@@ -39,6 +40,13 @@ public:
     void reset() override {
         samples_ = 0;
         excitation_.reset();
+    }
+
+    void reweight() override {
+        d_ = row_weights(cfg);
+        t_ = col_weights<N>(cfg);
+        excitation_.set_weights(d_, t_);
+        reset();
     }
 
     int update(const Real *a, const Real *, const Real *y) override {
@@ -91,9 +99,16 @@ public:
         return 0;
     }
 
+    int uncertainty(const Real *phi, Real *std, Real *scale) const override {
+        const CovKind kind = cfg.method == LOADID_METHOD_LS_BATCH ? CovKind::LS : CovKind::TLS;
+        const CovInput in{kind, N, excitation_.gram().data(), t_.data(), samples_, phi, nullptr,
+                          nullptr};
+        return covariance_std(in, std, scale);
+    }
+
 private:
-    const Vec6 d_;
-    const Vec<N1> t_;
+    Vec6 d_;
+    Vec<N1> t_;
     Excitation<N> excitation_;
     std::unique_ptr<Real[]> rows_;
     int64_t samples_ = 0;

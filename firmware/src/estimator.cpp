@@ -16,7 +16,7 @@ namespace {
 
 bool positive_finite(loadid_real_t v) { return std::isfinite(v) && v > 0; }
 
-bool valid_method(int m) { return m >= LOADID_METHOD_RLS && m <= LOADID_METHOD_TLS_BATCH; }
+bool valid_method(int m) { return m >= LOADID_METHOD_RLS && m <= LOADID_METHOD_REFINED; }
 
 bool valid_config(const loadid_est_config_t &c) {
     if (!valid_method(c.method)) return false;
@@ -42,12 +42,13 @@ loadid_est *make(const loadid_est_config_t &c) {
         case LOADID_METHOD_RIV: return make_recursive_ls<N>(c);
         case LOADID_METHOD_RTLS: return make_rtls<N>(c);
         case LOADID_METHOD_LS_BATCH:
-        case LOADID_METHOD_TLS_BATCH: return make_batch<N>(c);
+        case LOADID_METHOD_TLS_BATCH:
+        case LOADID_METHOD_REFINED: return make_batch<N>(c);
     }
     return nullptr;
 }
 
-const char *const kNames[] = {"?", "RLS", "RIV", "RTLS", "LS_BATCH", "TLS_BATCH"};
+const char *const kNames[] = {"?", "RLS", "RIV", "RTLS", "LS_BATCH", "TLS_BATCH", "REFINED"};
 
 }  // namespace
 
@@ -137,6 +138,19 @@ extern "C" int loadid_est_reset(loadid_est_t *est) {
     return 0;
 }
 
+extern "C" int loadid_est_set_weights(loadid_est_t *est, const loadid_real_t row_sigma[6],
+                                      const loadid_real_t *col_weight) {
+    if (!est || !row_sigma || !col_weight) return -EINVAL;
+    for (int i = 0; i < LOADID_NROWS; ++i)
+        if (!positive_finite(row_sigma[i])) return -EINVAL;
+    for (int j = 0; j <= est->cfg.n_params; ++j)
+        if (!positive_finite(col_weight[j])) return -EINVAL;
+    for (int i = 0; i < LOADID_NROWS; ++i) est->cfg.row_sigma[i] = row_sigma[i];
+    for (int j = 0; j <= est->cfg.n_params; ++j) est->cfg.col_weight[j] = col_weight[j];
+    est->reweight();
+    return 0;
+}
+
 extern "C" int loadid_est_update(loadid_est_t *est, const loadid_real_t *A,
                                  const loadid_real_t *C, const loadid_real_t y[6]) {
     if (!est || !A || !y) return -EINVAL;
@@ -155,6 +169,16 @@ extern "C" int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi,
     return est->estimate(phi, info);
 }
 
+extern "C" int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real_t *phi,
+                                      loadid_real_t *std, loadid_real_t *scale) {
+    if (!est || !phi || !std) return -EINVAL;
+    if (!all_finite(phi, est->cfg.n_params)) return LOADID_E_NONFINITE;
+    loadid_real_t s;
+    const int rc = est->uncertainty(phi, std, &s);
+    if (scale) *scale = s;
+    return rc;
+}
+
 extern "C" const loadid_est_config_t *loadid_est_config(const loadid_est_t *est) {
     return est ? &est->cfg : nullptr;
 }
@@ -165,7 +189,7 @@ extern "C" const char *loadid_method_name(loadid_method_t method) {
 
 extern "C" int loadid_method_from_name(const char *name) {
     if (!name) return -EINVAL;
-    for (int m = LOADID_METHOD_RLS; m <= LOADID_METHOD_TLS_BATCH; ++m)
+    for (int m = LOADID_METHOD_RLS; m <= LOADID_METHOD_REFINED; ++m)
         if (std::strcmp(name, kNames[m]) == 0) return m;
     return -EINVAL;
 }

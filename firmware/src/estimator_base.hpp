@@ -13,10 +13,16 @@ struct loadid_est {
     loadid_est &operator=(const loadid_est &) = delete;
 
     virtual void reset() = 0;
+    // cfg's row_sigma and col_weight changed: derive the weights again and
+    // reset (loadid_est_set_weights).
+    virtual void reweight() = 0;
     // Inputs are checked (non-NULL, finite) by the C API before this call;
     // an implementation returns 0 or LOADID_E_FULL without changing state.
     virtual int update(const loadid_real_t *A, const loadid_real_t *C, const loadid_real_t *y) = 0;
     virtual int estimate(loadid_real_t *phi, loadid_est_info_t *info) const = 0;
+    // One standard deviation of each element of phi (this method's estimate)
+    // and the a-posteriori noise scale (uncertainty.hpp).
+    virtual int uncertainty(const loadid_real_t *phi, loadid_real_t *std, loadid_real_t *scale) const = 0;
 
-    const loadid_est_config_t cfg;
+    loadid_est_config_t cfg;  // changed only by loadid_est_set_weights
 };

@@ -28,6 +28,12 @@ public:
 
     void reset() { gram_.setZero(); }
 
+    void set_weights(const Vec6 &row_weight, const Vec<N1> &col_weight) {
+        d_ = row_weight;
+        t_ = col_weight;
+        reset();
+    }
+
     void add(const Regressor<N> &A, const Vec6 &y, Real forgetting = Real(1)) {
         Eigen::Matrix<Real, LOADID_NROWS, N1, Eigen::RowMajor> W;
         W.template leftCols<N>() = A;
@@ -67,6 +73,11 @@ public:
         if (!(l1 > 0)) return Real(1);
         return std::sqrt(l0 / l1);
     }
+
+    // The information matrix (lower triangle valid) and the weights it was
+    // built with, for the covariance of an estimate (uncertainty.hpp).
+    const Eigen::Matrix<Real, N1, N1> &gram() const { return gram_; }
+    const Vec<N1> &col_weight() const { return t_; }
 
 private:
     Vec6 d_;

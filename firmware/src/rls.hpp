@@ -18,6 +18,7 @@
 
 #include "estimator_base.hpp"
 #include "excitation.hpp"
+#include "uncertainty.hpp"
 
 namespace loadid {
 
@@ -28,13 +29,19 @@ public:
         : loadid_est(c),
           instrumental_(c.method == LOADID_METHOD_RIV),
           excitation_(row_weights(c), col_weights<N>(c)) {
-        for (int i = 0; i < 6; ++i) lambda_(i) = c.row_sigma[i] * c.row_sigma[i];
+        reweight();
+    }
+
+    void reweight() override {
+        for (int i = 0; i < 6; ++i) lambda_(i) = cfg.row_sigma[i] * cfg.row_sigma[i];
+        excitation_.set_weights(row_weights(cfg), col_weights<N>(cfg));
         reset();
     }
 
     void reset() override {
         phi_.setZero();
         M_ = Eigen::Matrix<Real, N, N>::Identity() / cfg.p0;  // RIV: Sigma^-1
+        CC_.setZero();
         b_.setZero();
         U_.setIdentity();                                     // RLS: Sigma = U D U^T
         D_.setConstant(cfg.p0);
@@ -65,6 +72,13 @@ public:
         if (!solved.allFinite()) return LOADID_E_NOT_EXCITED;
         out = solved;
         return 0;
+    }
+
+    int uncertainty(const Real *phi, Real *std, Real *scale) const override {
+        const CovInput in{instrumental_ ? CovKind::IV : CovKind::LS, N, excitation_.gram().data(),
+                          excitation_.col_weight().data(), samples_, phi,
+                          instrumental_ ? M_.data() : nullptr, instrumental_ ? CC_.data() : nullptr};
+        return covariance_std(in, std, scale);
     }
 
 private:
@@ -103,6 +117,8 @@ private:
         const Eigen::Matrix<Real, N, 6> CtLi = C.transpose() * lambda_.cwiseInverse().asDiagonal();
         M_ = lam * M_;
         M_.noalias() += CtLi.lazyProduct(B);
+        CC_ = lam * CC_;  // C^T W C: the instruments' part of RIV's covariance
+        CC_.noalias() += CtLi.lazyProduct(C);
         b_ = lam * b_;
         b_.noalias() += CtLi * y;
     }
@@ -111,6 +127,7 @@ private:
     Vec6 lambda_;
     Vec<N> phi_;
     Eigen::Matrix<Real, N, N> M_;
+    Eigen::Matrix<Real, N, N> CC_;
     Vec<N> b_;
     Eigen::Matrix<Real, N, N> U_;
     Vec<N> D_;

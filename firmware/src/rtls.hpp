@@ -24,6 +24,7 @@
 #include "excitation.hpp"
 #include "linalg.hpp"
 #include "tls_solution.hpp"
+#include "uncertainty.hpp"
 
 namespace loadid {
 
@@ -40,6 +41,13 @@ public:
     explicit Rtls(const loadid_est_config_t &c)
         : loadid_est(c), d_(row_weights(c)), t_(col_weights<N>(c)),
           excitation_(d_, t_) { reset(); }
+
+    void reweight() override {
+        d_ = row_weights(cfg);
+        t_ = col_weights<N>(cfg);
+        excitation_.set_weights(d_, t_);
+        reset();
+    }
 
     void reset() override {
         U_.setZero();
@@ -103,6 +111,12 @@ public:
         if (sol.status) return sol.status;
         out = sol.phi;
         return 0;
+    }
+
+    int uncertainty(const Real *phi, Real *std, Real *scale) const override {
+        const CovInput in{CovKind::TLS, N, excitation_.gram().data(), t_.data(), samples_, phi,
+                          nullptr, nullptr};
+        return covariance_std(in, std, scale);
     }
 
 private:
@@ -238,8 +252,8 @@ private:
         return std::sqrt(diag + Real(2) * off);
     }
 
-    const Vec6 d_;
-    const Vec<N1> t_;
+    Vec6 d_;
+    Vec<N1> t_;
     Excitation<N> excitation_;
     // estimate() applies the waiting blocks: the data M holds do not change,
     // only how far its SVD has been brought up to date.

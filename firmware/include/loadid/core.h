@@ -6,6 +6,7 @@
 #include "loadid/regressor.h"
 #include "loadid/estimator.h"
 #include "loadid/inertia.h"
+#include "loadid/load_model.h"
 #include "loadid/chain.h"
 #include "loadid/kinematics.h"
 #include "loadid/joint_filter.h"

@@ -10,6 +10,9 @@
  *              singular value is not unique, the estimate of eq. (36)
  *   LS_BATCH   weighted least squares over all stored rows (reference)
  *   TLS_BATCH  one SVD over all stored, weighted rows (reference)
+ *   REFINED    the core's TLS_BATCH; the pipeline feeds it once, when the
+ *              window ends, with zero-lag (smoothed) signals and measured
+ *              noise weights
  *
  * Every method works on n_params = 10 (eq. 5, zeroed wrench) or 16
  * ([phi; offset], regressor [A E6]). Matrices are row-major.
@@ -34,7 +37,8 @@ typedef enum {
     LOADID_METHOD_RIV = 2,
     LOADID_METHOD_RTLS = 3,
     LOADID_METHOD_LS_BATCH = 4,
-    LOADID_METHOD_TLS_BATCH = 5
+    LOADID_METHOD_TLS_BATCH = 5,
+    LOADID_METHOD_REFINED = 6
 } loadid_method_t;
 
 /* Immutable configuration of one estimator. loadid_est_config_default()
@@ -138,6 +142,14 @@ void loadid_est_destroy(loadid_est_t *est);
 /* Back to the state right after create. Returns 0 or -EINVAL. */
 int loadid_est_reset(loadid_est_t *est);
 
+/* New row and column weights (row_sigma, col_weight of the configuration,
+ * e.g. from loadid_est_weights_from_noise on a copy), then a reset: the
+ * measured noise model sets them when an estimation starts. No allocation.
+ * Returns 0, or -EINVAL (NULL, or a value not finite and > 0: nothing
+ * changed). */
+int loadid_est_set_weights(loadid_est_t *est, const loadid_real_t row_sigma[6],
+                           const loadid_real_t *col_weight);
+
 /* Adds one sample. A: 6 x n_params data matrix (eq. 6, 9 or [A E6]);
  * y: the measured wrench [f; tau] (zeroed for n_params = 10 when the
  * zeroing term is in A). C: RIV instruments, same shape as A (required for
@@ -157,6 +169,20 @@ int loadid_est_update(loadid_est_t *est, const loadid_real_t *A,
  * phi never holds NaN or Inf. */
 int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi,
                         loadid_est_info_t *info);
+
+/* One standard deviation of each element of phi, this estimator's own
+ * estimate (as loadid_est_estimate gave it), from its covariance on the
+ * weighted data: RLS and LS_BATCH s^2 (A^T W A)^-1 (Sigma of eq. 17); RIV
+ * s^2 M^-1 (C^T W C) M^-T (eqs. 20-22); RTLS, TLS_BATCH and REFINED the
+ * first-order covariance of the TLS solution. W = D^2 (row weights); the
+ * scale s is measured a posteriori from the weighted residual (1 when the
+ * configured noise levels match the data) and returned in *scale (may be
+ * NULL). std: n_params values.
+ * Returns 0; -EINVAL; LOADID_E_NONFINITE (phi not finite);
+ * LOADID_E_NOT_EXCITED (too few samples, or the data leave a direction of
+ * phi undetermined: std is then +Inf). No allocation, no system call. */
+int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real_t *phi,
+                           loadid_real_t *std, loadid_real_t *scale);
 
 /* The configuration the estimator was created with. */
 const loadid_est_config_t *loadid_est_config(const loadid_est_t *est);

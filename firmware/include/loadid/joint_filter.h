@@ -104,6 +104,16 @@ int loadid_jf_smooth(const loadid_jf_config_t *cfg, size_t count,
                      loadid_real_t *work, loadid_real_t *q_out,
                      loadid_real_t *qd_out, loadid_real_t *qdd_out);
 
+/* Standard deviations of the filter's (smoothed = 0) or the RTS
+ * smoother's (smoothed = 1) errors of q, qd and qdd [rad, rad/s, rad/s^2
+ * or m...] in steady state at a constant step dt_s > 0: the model's own
+ * covariance, from the Riccati recursion iterated to convergence (for the
+ * smoother, P^s = P + G (P^s - P^-) G^T, G = P F^T (P^-)^-1). This is the
+ * noise of what the joints give the estimators, under the white-jerk
+ * model. Returns 0 or -EINVAL (NULL, bad config, dt_s not finite > 0). */
+int loadid_jf_steady_sigma(const loadid_jf_config_t *cfg, double dt_s, int smoothed,
+                           double sigma[3]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,41 @@
+// One standard deviation of every element of an estimate, from the
+// information matrix the excitation gate keeps (excitation.hpp), so every
+// method gets its own covariance at no per-sample cost:
+//   LS   (RLS, LS_BATCH)  s^2 (A^T W A)^-1, RLS's own Sigma of eq. (17);
+//   IV   (RIV)            s^2 M^-1 (C^T W C) M^-T, M = C^T W A (eqs. 20-22);
+//   TLS  (RTLS, TLS_BATCH, REFINED) the first-order covariance of the TLS
+//        solution in the weighted coordinates (Van Huffel & Vandewalle 1991,
+//        sec. 8.2): s^2 (1 + |x|^2) (A~^T A~ - sigma_{n+1}^2 I)^-1, mapped
+//        back through the column weights T.
+// W = D^2 are the row weights, so with noise levels that match the data the
+// scale s is 1. s is measured a posteriori (the weighted residual of the
+// method's own estimate over the degrees of freedom), so a noise model off
+// by a factor, or a vibration it does not know, widens the band instead of
+// leaving it wrong.
+#pragma once
+
+#include <cstdint>
+
+#include "eigen_types.hpp"
+
+namespace loadid {
+
+enum class CovKind { LS, IV, TLS };
+
+struct CovInput {
+    CovKind kind;
+    int n;                 // parameters (10 or 16)
+    const Real *gram;      // (n+1) x (n+1) column-major, lower triangle: sum of
+                           // (D [A y] T)^T (D [A y] T)
+    const Real *t;         // the n + 1 column weights T
+    int64_t samples;       // k: 6 k rows
+    const Real *phi;       // the method's estimate (n values)
+    const Real *iv_m;      // IV: n x n column-major C^T W A, else nullptr
+    const Real *iv_cc;     // IV: n x n column-major C^T W C, else nullptr
+};
+
+// Fills std (n values) and *scale (s). Returns 0, or LOADID_E_NOT_EXCITED
+// when the information matrix is singular (std then +Inf).
+int covariance_std(const CovInput &in, Real *std, Real *scale);
+
+}  // namespace loadid
