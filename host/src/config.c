@@ -97,6 +97,15 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->rt_cpu = -1;
     cfg->kalman_spec_sigma = 0.5;
     cfg->kalman_alpha_sigma = 1.0;
+    cfg->model_mass_rel_std = 0.05;
+    cfg->model_com_std = 0.005;
+    cfg->model_inertia_rel_std = 0.3;
+    cfg->model_max_gyration = 0.5;
+    cfg->model_fallback_density = 2700.0;
+    cfg->sim_noise_force = 0.1;
+    cfg->sim_noise_torque = 0.005;
+    cfg->sim_noise_linear = 0.5;
+    cfg->sim_noise_angular = 5.0;
 
     cfg->traj_base_frequency = 0.5;
     cfg->traj_harmonics = 4;
@@ -343,25 +352,63 @@ fail:
     return -EINVAL;
 }
 
+/* A noise level: a number > 0 (its bit set in noise_given) or "auto". */
+static int read_level(loadid_yaml_node_t *map, const char *key, double *out, int bit,
+                      loadid_config_t *c) {
+    loadid_yaml_node_t *n = loadid_yaml_get(map, key);
+    char word[16];
+    if (!n) return 0;
+    if (loadid_yaml_kind(n) == LOADID_YAML_SCALAR && loadid_yaml_as_double(n, out) == 0) {
+        if (check_sign(n, *out, POSITIVE)) return -EINVAL;
+        c->noise_given |= bit;
+        return 1;
+    }
+    if (loadid_yaml_kind(n) != LOADID_YAML_SCALAR || loadid_yaml_as_string(n, word, sizeof word) ||
+        strcmp(word, "auto") != 0)
+        return loadid_yaml_fail(n, "expected a number > 0 or auto");
+    return 1;
+}
+
+/* noise: auto, or a mapping of levels (each a number or auto). */
+static int read_noise(loadid_yaml_node_t *root, loadid_config_t *c) {
+    loadid_yaml_node_t *s = loadid_yaml_get(root, "noise");
+    char word[16];
+    if (!s || loadid_yaml_is_null(s)) return 0;
+    if (loadid_yaml_kind(s) == LOADID_YAML_SCALAR) {
+        if (loadid_yaml_as_string(s, word, sizeof word) || strcmp(word, "auto") != 0)
+            return loadid_yaml_fail(s, "expected auto or a mapping of noise levels");
+        return 0;
+    }
+    TRY(read_section(root, "noise", &s));
+    TRY(read_level(s, "force", &c->noise_force, LOADID_NOISE_GIVEN_FORCE, c));
+    TRY(read_level(s, "torque", &c->noise_torque, LOADID_NOISE_GIVEN_TORQUE, c));
+    TRY(read_level(s, "linear", &c->noise_linear, LOADID_NOISE_GIVEN_LINEAR, c));
+    TRY(read_level(s, "angular", &c->noise_angular, LOADID_NOISE_GIVEN_ANGULAR, c));
+    TRY(read_level(s, "omega", &c->noise_omega, LOADID_NOISE_GIVEN_OMEGA, c));
+    TRY(read_number(s, "omega_typical", &c->omega_typical, POSITIVE));
+    return 0;
+fail:
+    return -EINVAL;
+}
+
 static int read_methods(loadid_yaml_node_t *seq, loadid_config_t *c) {
     const size_t count = loadid_yaml_count(seq);
     if (count == 0) return loadid_yaml_fail(seq, "expected at least one method, got none");
     int methods[LOADID_MAX_METHODS];
-    size_t first[LOADID_METHOD_TLS_BATCH + 1] = {0}; /* 1 + index of its first listing */
+    size_t first[LOADID_METHOD_REFINED + 1] = {0}; /* 1 + index of its first listing */
     for (size_t i = 0; i < count; ++i) {
         const loadid_yaml_node_t *item = loadid_yaml_item(seq, i);
         char name[64];
         if (loadid_yaml_as_string(item, name, sizeof name)) return -EINVAL;
         const int m = loadid_method_from_name(name);
-        if (m < LOADID_METHOD_RLS || m > LOADID_METHOD_TLS_BATCH)
-            return loadid_yaml_fail(item,
-                                    "unknown method '%s' (RLS, RIV, RTLS, LS_BATCH or TLS_BATCH)",
-                                    name);
+        if (m < LOADID_METHOD_RLS || m > LOADID_METHOD_REFINED)
+            return loadid_yaml_fail(
+                item, "unknown method '%s' (RLS, RIV, RTLS, LS_BATCH, TLS_BATCH or REFINED)", name);
         if (first[m])
             return loadid_yaml_fail(item, "method %s listed twice (first as item %zu)", name,
                                     first[m] - 1);
         first[m] = i + 1;
-        /* five names and no duplicates: i < LOADID_MAX_METHODS here */
+        /* six names and no duplicates: i < LOADID_MAX_METHODS here */
         methods[i] = m;
     }
     memcpy(c->methods, methods, count * sizeof methods[0]);
@@ -412,20 +459,21 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
     TRY(read_path(s, path, "directory", c->results_directory, sizeof c->results_directory));
     TRY(read_path(s, path, "load", c->results_load, sizeof c->results_load));
 
-    TRY(read_section(root, "noise", &s));
-    TRY(read_number(s, "force", &c->noise_force, POSITIVE));
-    TRY(read_number(s, "torque", &c->noise_torque, POSITIVE));
-    TRY(read_number(s, "linear", &c->noise_linear, POSITIVE));
-    TRY(read_number(s, "angular", &c->noise_angular, POSITIVE));
-    TRY(read_number(s, "omega", &c->noise_omega, POSITIVE));
-    TRY(read_number(s, "omega_typical", &c->omega_typical, POSITIVE));
+    TRY(read_noise(root, c));
 
     TRY(read_section(root, "kalman", &s));
     TRY(read_number(s, "jerk_psd", &c->kalman_jerk_psd, POSITIVE));
     TRY(read_number(s, "meas_sigma", &c->kalman_meas_sigma, POSITIVE));
     TRY(read_number(s, "max_joint_age_s", &c->kalman_max_joint_age_s, POSITIVE));
-    TRY(read_number(s, "spec_sigma", &c->kalman_spec_sigma, POSITIVE));
-    TRY(read_number(s, "alpha_sigma", &c->kalman_alpha_sigma, POSITIVE));
+    TRY(read_level(s, "spec_sigma", &c->kalman_spec_sigma, LOADID_NOISE_GIVEN_KF_SPEC, c));
+    TRY(read_level(s, "alpha_sigma", &c->kalman_alpha_sigma, LOADID_NOISE_GIVEN_KF_ALPHA, c));
+
+    TRY(read_section(root, "model", &s));
+    TRY(read_number(s, "mass_rel_std", &c->model_mass_rel_std, POSITIVE));
+    TRY(read_number(s, "com_std", &c->model_com_std, POSITIVE));
+    TRY(read_number(s, "inertia_rel_std", &c->model_inertia_rel_std, POSITIVE));
+    TRY(read_number(s, "max_gyration", &c->model_max_gyration, POSITIVE));
+    TRY(read_number(s, "fallback_density", &c->model_fallback_density, POSITIVE));
     return 0;
 fail:
     return -EINVAL;
@@ -585,6 +633,17 @@ static int read_simulation(loadid_yaml_node_t *root, loadid_config_t *c) {
     TRY(read_numbers(s, "load_phi", c->sim_load_phi, 10, 10, NULL, ANY));
     TRY(read_numbers(s, "offset", c->sim_offset, 6, 6, NULL, ANY));
     TRY(read_uint64(s, "seed", &c->sim_seed));
+    /* The simulated noise: simulation.noise, else the noise.* numbers. */
+    if (c->noise_given & LOADID_NOISE_GIVEN_FORCE) c->sim_noise_force = c->noise_force;
+    if (c->noise_given & LOADID_NOISE_GIVEN_TORQUE) c->sim_noise_torque = c->noise_torque;
+    if (c->noise_given & LOADID_NOISE_GIVEN_LINEAR) c->sim_noise_linear = c->noise_linear;
+    if (c->noise_given & LOADID_NOISE_GIVEN_ANGULAR) c->sim_noise_angular = c->noise_angular;
+    loadid_yaml_node_t *n = NULL;
+    TRY(read_section(s, "noise", &n));
+    TRY(read_number(n, "force", &c->sim_noise_force, NON_NEGATIVE));
+    TRY(read_number(n, "torque", &c->sim_noise_torque, NON_NEGATIVE));
+    TRY(read_number(n, "linear", &c->sim_noise_linear, NON_NEGATIVE));
+    TRY(read_number(n, "angular", &c->sim_noise_angular, NON_NEGATIVE));
     return 0;
 fail:
     return -EINVAL;

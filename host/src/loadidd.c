@@ -7,7 +7,10 @@
  *       machine allows, with no sockets: can.log and lcm.log merged in time
  *       order, commands acting at their utime; writes the final estimate of
  *       every configured method as a JSON array (OUT.json, else stdout).
- *       Exit 0, or non-zero with a one-line reason on stderr.
+ *       Exit 0, or non-zero with a one-line reason on stderr; a recording
+ *       that ends before the window, lacks ZERO or START, or lacks joint
+ *       data for part of the window is written with "complete": false and
+ *       exits 3 unless --allow-incomplete.
  *   loadidd --config FILE [--can-file CAN.LOG] [--publish-every N]
  *       the live service (live.c): joint states and commands from LCM, JR3
  *       frames from SocketCAN (can.interface) or, with --can-file, from a
@@ -37,13 +40,15 @@ static const char *prog = "loadidd";
 
 static void usage(FILE *out) {
     fprintf(out,
-            "usage: %s --config FILE --offline RECORDING_DIR [--result OUT.json] [--verbose]\n"
+            "usage: %s --config FILE --offline RECORDING_DIR [--result OUT.json]\n"
+            "                [--allow-incomplete] [--verbose]\n"
             "       %s --config FILE [--can-file CAN.LOG [--can-file-epoch US]]\n"
             "                [--publish-every N] [--verbose]\n"
             "Estimates the inertial parameters of the load on the robot's wrist sensor\n"
             "(Kubus, Kroeger, Wahl 2008). --offline runs the pipeline over a recording\n"
             "(can.log, lcm.log) and writes the final estimate of every configured method\n"
-            "as a JSON array to OUT.json (default stdout). Without --offline it runs live:\n"
+            "as a JSON array to OUT.json (default stdout); an incomplete recording exits 3\n"
+            "(\"complete\": false) unless --allow-incomplete. Without --offline it runs live:\n"
             "LCM in and out, JR3 frames from SocketCAN or a candump log (--can-file),\n"
             "or a Modbus F/T sensor (sensor.type modbus). --publish-every overrides\n"
             "estimation.publish_every.\n",
@@ -66,7 +71,7 @@ static void state_line(void *ctx, int64_t utime, int state, const char *reason) 
 }
 
 static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, const char *dir,
-                       const char *result_path) {
+                       const char *result_path, int allow_incomplete) {
     char err[4400];
     loadid_pipeline_sink_t sink = {.log = log_line, .state = state_line};
     loadid_pipeline_t *p = NULL;
@@ -92,6 +97,13 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
                 (long long)st.samples_saturated, (long long)st.samples_faulty,
                 (long long)st.sequence_gaps, (long long)st.joint_msgs_bad,
                 (long long)st.samples_stale);
+    const loadid_noise_levels_t *l = &st.noise;
+    if (verbose && loadid_pipeline_started(p))
+        fprintf(stderr,
+                "%s: noise levels (channels from %s): f %.3g N, tau %.3g N m, a - g %.3g m/s^2, "
+                "alpha %.3g rad/s^2, omega %.3g rad/s\n",
+                prog, loadid_noise_source_name(l->channel_source), l->force, l->torque, l->spec,
+                l->alpha, l->omega);
     int status = 0;
     if (!loadid_pipeline_started(p)) {
         fprintf(stderr, "%s: %s: no START command in lcm.log: nothing was estimated\n", prog, dir);
@@ -112,11 +124,18 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
         }
         loadid_pipeline_estimate_t est[LOADID_MAX_METHODS];
         const int n = loadid_pipeline_estimates(p, est, LOADID_MAX_METHODS);
+        loadid_refined_report_t ref;
+        const int have_ref = loadid_pipeline_refined_report(p, &ref) == 0;
         FILE *out = result_path ? fopen(result_path, "w") : stdout;
-        if (!out || loadid_result_json_write(out, est, n) != 0 || (result_path && fclose(out) != 0)) {
+        if (!out || loadid_result_json_write(out, est, n, &st, have_ref ? &ref : NULL) != 0 ||
+            (result_path && fclose(out) != 0)) {
             fprintf(stderr, "%s: cannot write %s: %s\n", prog, result_path ? result_path : "stdout",
                     strerror(errno));
             status = 1;
+        } else if (!st.complete) {
+            fprintf(stderr, "%s: %s: incomplete recording: %s%s\n", prog, dir,
+                    st.incomplete_reason, allow_incomplete ? " (allowed)" : "");
+            if (!allow_incomplete) status = 3;
         }
     }
     loadid_pipeline_destroy(p);
@@ -126,12 +145,14 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
 int main(int argc, char **argv) {
     const char *config_path = NULL, *offline = NULL, *result = NULL, *can_file = NULL;
     int publish_every = 0; /* 0: estimation.publish_every */
+    int allow_incomplete = 0;
     long long epoch = 0;
     static const struct option opts[] = {
         {"config", required_argument, NULL, 'c'}, {"offline", required_argument, NULL, 'o'},
         {"result", required_argument, NULL, 'r'}, {"verbose", no_argument, NULL, 'v'},
         {"can-file", required_argument, NULL, 'f'}, {"publish-every", required_argument, NULL, 'p'},
         {"can-file-epoch", required_argument, NULL, 'e'},
+        {"allow-incomplete", no_argument, NULL, 'a'},
         {"help", no_argument, NULL, 'h'},         {NULL, 0, NULL, 0}};
     int c;
     while ((c = getopt_long(argc, argv, "c:o:r:vh", opts, NULL)) != -1) {
@@ -142,6 +163,7 @@ int main(int argc, char **argv) {
             case 'v': verbose = 1; break;
             case 'f': can_file = optarg; break;
             case 'e': epoch = strtoll(optarg, NULL, 10); break;
+            case 'a': allow_incomplete = 1; break;
             case 'p': {
                 char *end;
                 long v = strtol(optarg, &end, 10);
@@ -175,5 +197,5 @@ int main(int argc, char **argv) {
                                       .verbose = verbose};
         return loadid_live_run(&cfg, &chain, &live);
     }
-    return run_offline(&cfg, &chain, offline, result);
+    return run_offline(&cfg, &chain, offline, result, allow_incomplete);
 }

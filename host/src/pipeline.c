@@ -14,6 +14,10 @@
 
 #define MIN_ZEROING_SAMPLES 10
 #define PENDING_MAX 64 /* samples waiting for joint data: 64 ms at 1 kHz */
+#define NOISE_MAX_GAP_US 20000 /* third differences need consecutive samples */
+/* A run is incomplete when more of its window's samples than this were
+ * refused for want of joint data. */
+#define MAX_STALE_SHARE 0.05
 
 struct loadid_pipeline {
     loadid_config_t cfg;
@@ -26,6 +30,25 @@ struct loadid_pipeline {
     loadid_signals_t *sig;
     loadid_jr3_decoder_t *jr3;
     loadid_real_t distal[10];
+    loadid_model_config_t model_cfg;
+    /* the measured noise model (noise_model.h) */
+    loadid_noise_acc_t noise;
+    loadid_noise_levels_t levels;     /* the on-line estimators' */
+    loadid_kin_t *kin;                /* the joint levels at the pose */
+    double filter_sigma[3];           /* the joint filter's steady q, qd, qdd errors */
+    loadid_real_t last_q[LOADID_MAX_JOINTS];
+    int have_q;
+    int has_accel;                    /* the sensor has an accelerometer (JR3) */
+    /* REFINED (refined.h) */
+    int refined_m;                    /* its method index, -1 when not configured */
+    loadid_refined_t *refined;
+    loadid_refined_report_t refined_rep;
+    int refined_ran;
+    /* completeness of the last run */
+    int zero_seen;
+    int complete;
+    char incomplete_reason[192];
+    int64_t stale_at_start;
 
     int state;
     char reason[192];
@@ -83,7 +106,16 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
     p->publish_every = publish_every < 0 ? 0 : publish_every;
     p->n_params = cfg->offset_model_estimate ? LOADID_NPHI_OFFSET : LOADID_NPHI;
     p->primary = -1;
+    p->refined_m = -1;
+    p->has_accel = cfg->sensor_type == LOADID_SENSOR_JR3;
     for (int i = 0; i < 10; ++i) p->distal[i] = (loadid_real_t)cfg->distal_phi[i];
+    loadid_model_config_default(&p->model_cfg);
+    p->model_cfg.mass_rel_std = (loadid_real_t)cfg->model_mass_rel_std;
+    p->model_cfg.com_std = (loadid_real_t)cfg->model_com_std;
+    p->model_cfg.inertia_rel_std = (loadid_real_t)cfg->model_inertia_rel_std;
+    p->model_cfg.max_gyration = (loadid_real_t)cfg->model_max_gyration;
+    p->model_cfg.fallback_density = (loadid_real_t)cfg->model_fallback_density;
+    loadid_noise_acc_reset(&p->noise);
 
     loadid_signals_config_t scfg;
     loadid_setup_signals(cfg, (loadid_signal_source_t)cfg->signals, &scfg);
@@ -95,6 +127,18 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
         rc = loadid_jr3_decoder_create(&j, &p->jr3);
         what = "the JR3 decoder";
     }
+    if (rc == 0) {
+        rc = loadid_kin_create(chain, cfg->robot_gravity, &p->kin);
+        what = "the kinematics";
+    }
+    if (rc == 0) {
+        loadid_jf_config_t jf;
+        loadid_jf_config_default(&jf);
+        jf.jerk_psd = (loadid_real_t)cfg->kalman_jerk_psd;
+        jf.meas_sigma = (loadid_real_t)cfg->kalman_meas_sigma;
+        rc = loadid_jf_steady_sigma(&jf, 1e-3, 0, p->filter_sigma);
+        what = "the joint filter's noise";
+    }
     p->num_methods = cfg->num_methods;
     for (int m = 0; m < p->num_methods && rc == 0; ++m) {
         loadid_est_config_t e;
@@ -105,6 +149,11 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
         e.batch_capacity = (int)ceil(cfg->duration_s * 2000) + 100;
         if (rc == 0) rc = loadid_est_create(&e, &p->est[m]);
         what = "an estimator";
+        if (rc == 0 && cfg->methods[m] == LOADID_METHOD_REFINED) {
+            p->refined_m = m;
+            rc = loadid_refined_create(cfg, chain, &p->refined);
+            what = "REFINED's stores";
+        }
     }
     if (rc != 0) {
         snprintf(err, errlen, "cannot create %s: %s", what, loadid_strerror(rc));
@@ -124,13 +173,35 @@ void loadid_pipeline_destroy(loadid_pipeline_t *p) {
     for (int m = 0; m < LOADID_MAX_METHODS; ++m) loadid_est_destroy(p->est[m]);
     loadid_signals_destroy(p->sig);
     loadid_jr3_decoder_destroy(p->jr3);
+    loadid_kin_destroy(p->kin);
+    loadid_refined_destroy(p->refined);
     free(p);
 }
 
 /* ------------------------------------------------------------ estimates */
 
-/* Fills e with method m's current estimate (load only) and returns it. */
-static void estimate_of(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t *e) {
+/* The final estimate's uncertainty and load model (load_model_t). */
+static void model_of(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
+                     const loadid_real_t load[10], loadid_pipeline_estimate_t *e) {
+    loadid_real_t std[16], scale = 0;
+    if (loadid_est_uncertainty(p->est[m], phi, std, &scale) != 0)
+        for (int i = 0; i < 16; ++i) std[i] = (loadid_real_t)INFINITY;
+    loadid_load_model_t lm;
+    if (loadid_load_model(load, std, &p->model_cfg, &lm) != 0) return;
+    e->has_model = 1;
+    e->noise_scale = (double)scale;
+    for (int i = 0; i < 10; ++i) e->phi_std[i] = (double)std[i];
+    e->identified = lm.identified;
+    e->projected = lm.projected;
+    for (int i = 0; i < 10; ++i) e->model_phi[i] = (double)lm.phi[i];
+    e->model_mass = (double)lm.physical.mass;
+    for (int i = 0; i < 3; ++i) e->model_com[i] = (double)lm.physical.com[i];
+    for (int i = 0; i < 6; ++i) e->model_inertia_com[i] = (double)lm.physical.inertia_com[i];
+}
+
+/* Fills e with method m's current estimate (load only); final: with its
+ * uncertainty and load model (not on the per-sample path). */
+static void estimate_of(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t *e, int final) {
     loadid_real_t phi[16] = {0};
     loadid_est_info_t info;
     memset(&info, 0, sizeof info);
@@ -157,25 +228,87 @@ static void estimate_of(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t 
     for (int i = 0; i < 3; ++i) e->com[i] = (double)ph.com[i];
     for (int i = 0; i < 6; ++i) e->inertia_com[i] = (double)ph.inertia_com[i];
     e->physically_consistent = ph.violations == 0;
+    if (final) model_of(p, m, phi, load, e);
 }
 
-static void publish_all(loadid_pipeline_t *p) {
+static void publish_all(loadid_pipeline_t *p, int final) {
     for (int m = 0; m < p->num_methods; ++m) {
-        estimate_of(p, m, &p->latest[m]);
+        /* REFINED has an estimate only once the window has ended. */
+        if (m == p->refined_m && !final) continue;
+        estimate_of(p, m, &p->latest[m], final);
         if (p->sink.estimate) p->sink.estimate(p->sink.ctx, &p->latest[m]);
     }
 }
 
-static void finish_estimation(loadid_pipeline_t *p, int64_t utime) {
-    set_state(p, utime, LOADID_STATE_DONE, "");
-    publish_all(p);
-    /* wrench_t uses the first configured method with an estimate. */
-    p->primary = -1;
-    for (int m = 0; m < p->num_methods && p->primary < 0; ++m) {
-        if (!p->latest[m].valid) continue;
-        p->primary = m;
-        loadid_est_estimate(p->est[m], p->phi_total, NULL);
+static int popcount3(int bits) { return (bits & 1) + ((bits >> 1) & 1) + ((bits >> 2) & 1); }
+
+/* The primary method: the most identified groups; ties go to REFINED, then
+ * to the configuration's order. -1 when no method has an estimate. */
+static int best_method(const loadid_pipeline_t *p) {
+    int best = -1, best_score = -1;
+    for (int m = 0; m < p->num_methods; ++m) {
+        const loadid_pipeline_estimate_t *e = &p->latest[m];
+        if (!e->valid || !e->has_model) continue;
+        const int score = 2 * popcount3(e->identified) + (m == p->refined_m);
+        if (score > best_score) best = m, best_score = score;
     }
+    return best;
+}
+
+/* Why the run that just ended is not complete ("" when it is). */
+static void check_complete(loadid_pipeline_t *p, int64_t utime, int by_stop) {
+    const char *why = "";
+    char buf[192];
+    loadid_signals_stats_t s;
+    loadid_signals_stats(p->sig, &s);
+    const int64_t stale = s.samples_stale + s.samples_no_joints - p->stale_at_start;
+    if (p->n_params == LOADID_NPHI && !p->zero_seen) {
+        why = "no ZERO before START";
+    } else if (!by_stop && utime < p->est_end_us) {
+        snprintf(buf, sizeof buf, "the input ended %.3f s before the estimation window did",
+                 (double)(p->est_end_us - utime) / 1e6);
+        why = buf;
+    } else if ((double)stale > MAX_STALE_SHARE * (double)(stale + p->samples_used)) {
+        snprintf(buf, sizeof buf,
+                 "joint data missing for %lld of the window's %lld samples (more than %.0f %%)",
+                 (long long)stale, (long long)(stale + p->samples_used), MAX_STALE_SHARE * 100);
+        why = buf;
+    }
+    p->complete = why[0] == 0;
+    snprintf(p->incomplete_reason, sizeof p->incomplete_reason, "%s", why);
+}
+
+static void run_refined(loadid_pipeline_t *p) {
+    double channel[LOADID_NOISE_CHANNELS];
+    const int src = loadid_noise_acc_sigma(&p->noise, MIN_ZEROING_SAMPLES, channel);
+    const int rc = loadid_refined_run(p->refined, &p->cfg, p->has_accel, channel, src, p->g_init,
+                                      p->n_params, p->est[p->refined_m], &p->refined_rep);
+    p->refined_ran = 1;
+    if (rc != 0) {
+        note(p, "REFINED: %s", loadid_strerror(rc));
+        return;
+    }
+    const loadid_noise_levels_t *l = &p->refined_rep.levels;
+    note(p, "REFINED: %lld samples; a - g from the %s (sensor error %.3g m/s^2), alpha from the %s "
+            "(sensor error %.3g rad/s^2); levels f %.3g N, tau %.3g N m, a - g %.3g, alpha %.3g, "
+            "omega %.3g",
+         (long long)p->refined_rep.samples, p->refined_rep.spec_from_sensor ? "sensor" : "joints",
+         p->refined_rep.sensor_spec_error, p->refined_rep.alpha_from_sensor ? "sensor" : "joints",
+         p->refined_rep.sensor_alpha_error, l->force, l->torque, l->spec, l->alpha, l->omega);
+}
+
+static void finish_estimation(loadid_pipeline_t *p, int64_t utime, int by_stop) {
+    check_complete(p, utime, by_stop);
+    if (!p->complete) note(p, "incomplete: %s", p->incomplete_reason);
+    if (p->refined_m >= 0) run_refined(p);
+    set_state(p, utime, LOADID_STATE_DONE, "");
+    publish_all(p, 1);
+    /* wrench_t uses the primary method's physically consistent model. */
+    p->primary = best_method(p);
+    if (p->primary < 0) return;
+    const loadid_pipeline_estimate_t *e = &p->latest[p->primary];
+    loadid_est_estimate(p->est[p->primary], p->phi_total, NULL); /* the offset, for 16 */
+    for (int i = 0; i < 10; ++i) p->phi_total[i] = (loadid_real_t)e->model_phi[i] + p->distal[i];
 }
 
 /* ------------------------------------------------------------- zeroing */
@@ -202,7 +335,7 @@ static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
 /* Windows that end by time, before anything at utime is handled. */
 static void advance(loadid_pipeline_t *p, int64_t utime) {
     if (p->state == LOADID_STATE_ZEROING && utime >= p->zero_end_us) finish_zeroing(p, utime);
-    if (p->state == LOADID_STATE_ESTIMATING && utime >= p->est_end_us) finish_estimation(p, utime);
+    if (p->state == LOADID_STATE_ESTIMATING && utime >= p->est_end_us) finish_estimation(p, utime, 1);
 }
 
 /* The clock ends a window only TICK_GRACE_US after its end, so that a
@@ -218,7 +351,7 @@ void loadid_pipeline_finish(loadid_pipeline_t *p, int64_t now_us) {
     flush_pending(p, INT64_MAX, 0);
     advance(p, now_us);
     if (p->state == LOADID_STATE_ZEROING) finish_zeroing(p, now_us);
-    if (p->state == LOADID_STATE_ESTIMATING) finish_estimation(p, now_us);
+    if (p->state == LOADID_STATE_ESTIMATING) finish_estimation(p, now_us, 0);
 }
 
 /* ------------------------------------------------------------- inputs */
@@ -234,8 +367,12 @@ void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_jo
         pos[i] = (loadid_real_t)position[i];
         if (setpoint) set[i] = (loadid_real_t)setpoint[i];
     }
-    if (loadid_signals_push_joints(p->sig, utime, num_joints, pos, setpoint ? set : NULL) == 0)
+    if (loadid_signals_push_joints(p->sig, utime, num_joints, pos, setpoint ? set : NULL) == 0) {
+        memcpy(p->last_q, pos, (size_t)num_joints * sizeof pos[0]);
+        p->have_q = 1;
+        if (p->refined) loadid_refined_joint(p->refined, utime, pos);
         flush_pending(p, INT64_MIN, 1);
+    }
 }
 
 static void reset_run(loadid_pipeline_t *p) {
@@ -243,6 +380,37 @@ static void reset_run(loadid_pipeline_t *p) {
     p->samples_used = 0;
     p->since_publish = 0;
     p->primary = -1;
+    p->refined_ran = 0;
+    if (p->refined) loadid_refined_start(p->refined);
+}
+
+/* START: the noise levels measured so far (the zeroing window, else the
+ * third differences; the joint filter's covariance at the pose) become the
+ * on-line estimators' weights, unless the configuration gives them. */
+static void apply_measured_noise(loadid_pipeline_t *p) {
+    double channel[LOADID_NOISE_CHANNELS];
+    const int src = loadid_noise_acc_sigma(&p->noise, MIN_ZEROING_SAMPLES, channel);
+    double js = 0, ja = 0, jw = 0;
+    if (p->have_q)
+        loadid_noise_joint_levels(p->kin, p->last_q, p->filter_sigma[1], p->filter_sigma[2], &js,
+                                  &ja, &jw);
+    const int source = p->cfg.signals;
+    const int jr3_spec = source == LOADID_SIGNALS_SENSOR || source == LOADID_SIGNALS_MIXED;
+    const int jr3_alpha = source == LOADID_SIGNALS_SENSOR;
+    loadid_noise_combine(&p->cfg, jr3_spec, jr3_alpha, channel, src, js, ja, jw, &p->levels);
+    for (int m = 0; m < p->num_methods; ++m) {
+        if (m == p->refined_m) continue; /* weighted by its own run */
+        loadid_est_config_t e = *loadid_est_config(p->est[m]);
+        if (loadid_noise_weights(&p->levels, p->cfg.omega_typical, &e) == 0)
+            loadid_est_set_weights(p->est[m], e.row_sigma, e.col_weight);
+    }
+    const loadid_noise_levels_t *l = &p->levels;
+    note(p, "noise (%s): f %.3g N (%s), tau %.3g N m (%s), a - g %.3g m/s^2 (%s), alpha %.3g "
+            "rad/s^2 (%s), omega %.3g rad/s (%s)",
+         loadid_noise_source_name(src), l->force, loadid_noise_source_name(l->source[0]), l->torque,
+         loadid_noise_source_name(l->source[1]), l->spec, loadid_noise_source_name(l->source[2]),
+         l->alpha, loadid_noise_source_name(l->source[3]), l->omega,
+         loadid_noise_source_name(l->source[4]));
 }
 
 void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
@@ -259,6 +427,8 @@ void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
             memset(p->zero_sum, 0, sizeof p->zero_sum);
             memset(p->zero_g_sum, 0, sizeof p->zero_g_sum);
             p->zeroed = 0;
+            p->zero_seen = 1;
+            loadid_noise_acc_reset_still(&p->noise);
             p->zero_end_us = utime + (int64_t)llround(p->cfg.zeroing_window_s * 1e6);
             set_state(p, utime, LOADID_STATE_ZEROING, "");
             return;
@@ -275,18 +445,27 @@ void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
                 return;
             }
             reset_run(p);
+            apply_measured_noise(p);
+            {
+                loadid_signals_stats_t s;
+                loadid_signals_stats(p->sig, &s);
+                p->stale_at_start = s.samples_stale + s.samples_no_joints;
+            }
             snprintf(p->load_name, sizeof p->load_name, "%s", load_name ? load_name : "");
             p->started = 1;
             p->est_end_us = utime + (int64_t)llround(p->cfg.duration_s * 1e6);
             set_state(p, utime, LOADID_STATE_ESTIMATING, "");
             return;
         case LOADID_CMD_STOP:
-            if (p->state == LOADID_STATE_ESTIMATING) finish_estimation(p, utime);
+            if (p->state == LOADID_STATE_ESTIMATING) finish_estimation(p, utime, 1);
             else note(p, "STOP ignored: not estimating");
             return;
         case LOADID_CMD_RESET:
             reset_run(p);
             p->zeroed = 0;
+            p->zero_seen = 0;
+            p->complete = 0;
+            p->incomplete_reason[0] = 0;
             p->started = 0;
             p->load_name[0] = 0;
             for (int m = 0; m < p->num_methods; ++m) {
@@ -314,7 +493,12 @@ static void on_sample(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
         lin[i] = (loadid_real_t)s->value[LOADID_JR3_LINEAR][i];
         ang[i] = (loadid_real_t)s->value[LOADID_JR3_ANGULAR][i];
     }
+    double x[LOADID_NOISE_CHANNELS];
+    for (int i = 0; i < 6; ++i) x[i] = (double)y[i];
+    for (int i = 0; i < 3; ++i) x[6 + i] = (double)lin[i], x[9 + i] = (double)ang[i];
+    loadid_noise_acc_moving(&p->noise, s->t_us, NOISE_MAX_GAP_US / 3, x);
     if (p->state == LOADID_STATE_ZEROING) {
+        loadid_noise_acc_still(&p->noise, x);
         for (int i = 0; i < 6; ++i) p->zero_sum[i] += (double)y[i];
         p->zero_n++;
         loadid_kin_state_t k;
@@ -344,16 +528,17 @@ static void on_sample(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
         return;
     }
     const int have_c = riv && data_matrix(p, &instr, C) == 0;
+    if (p->refined) loadid_refined_sample(p->refined, s->t_us, y, lin, ang);
     for (int m = 0; m < p->num_methods; ++m) {
         const int is_riv = p->cfg.methods[m] == LOADID_METHOD_RIV;
-        if (is_riv && !have_c) continue;
+        if ((is_riv && !have_c) || m == p->refined_m) continue;
         if (loadid_est_update(p->est[m], A, is_riv ? C : NULL, y) != 0) p->estimator_errors++;
     }
     p->samples_used++;
     p->last_sample_us = s->t_us;
     if (p->publish_every > 0 && ++p->since_publish >= p->publish_every) {
         p->since_publish = 0;
-        publish_all(p);
+        publish_all(p, 0);
     }
 }
 
@@ -463,6 +648,15 @@ void loadid_pipeline_status(const loadid_pipeline_t *p, loadid_pipeline_status_t
     st->joint_msgs_bad = s.joint_msgs_bad;
     st->samples_stale = s.samples_stale + s.samples_no_joints;
     st->estimator_errors = p->estimator_errors;
+    st->complete = p->complete;
+    snprintf(st->incomplete_reason, sizeof st->incomplete_reason, "%s", p->incomplete_reason);
+    st->noise = p->levels;
+}
+
+int loadid_pipeline_refined_report(const loadid_pipeline_t *p, loadid_refined_report_t *out) {
+    if (p->refined_m < 0 || !p->refined_ran) return -ENODATA;
+    *out = p->refined_rep;
+    return 0;
 }
 
 int loadid_pipeline_estimates(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *out,

@@ -35,7 +35,32 @@ static void string(FILE *out, const char *s) {
     fputc('"', out);
 }
 
-int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, int n) {
+static void levels(FILE *out, const loadid_noise_levels_t *l) {
+    static const char *const names[5] = {"force", "torque", "spec", "alpha", "omega"};
+    const double v[5] = {l->force, l->torque, l->spec, l->alpha, l->omega};
+    fputc('{', out);
+    for (int i = 0; i < 5; ++i) {
+        fprintf(out, "%s\"%s\": ", i ? ", " : "", names[i]);
+        number(out, v[i]);
+    }
+    fputs(", \"source\": {", out);
+    for (int i = 0; i < 5; ++i) {
+        fprintf(out, "%s\"%s\": ", i ? ", " : "", names[i]);
+        string(out, loadid_noise_source_name(l->source[i]));
+    }
+    fputs("}, \"channels\": ", out);
+    array(out, l->channel, LOADID_NOISE_CHANNELS);
+    fputs(", \"channels_from\": ", out);
+    string(out, loadid_noise_source_name(l->channel_source));
+    fputs(", \"joint\": ", out);
+    const double j[3] = {l->joint_spec, l->joint_alpha, l->joint_omega};
+    array(out, j, 3);
+    fputc('}', out);
+}
+
+int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, int n,
+                             const loadid_pipeline_status_t *st,
+                             const loadid_refined_report_t *ref) {
     fputs("[\n", out);
     for (int i = 0; i < n; ++i) {
         const loadid_pipeline_estimate_t *e = &est[i];
@@ -56,6 +81,50 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
         fputs(",\n   \"condition_number\": ", out);
         number(out, e->condition_number);
         fprintf(out, ", \"physically_consistent\": %s", e->physically_consistent ? "true" : "false");
+        const int model = e->valid && e->has_model;
+        fputs(",\n   \"phi_std\": ", out);
+        if (model) {
+            array(out, e->phi_std, 10);
+        } else {
+            const double none[10] = {NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
+            array(out, none, 10);
+        }
+        fputs(",\n   \"identified\": [", out);
+        int first = 1;
+        for (int bit = LOADID_IDENT_MASS; bit <= LOADID_IDENT_INERTIA && model; bit <<= 1) {
+            if (!(e->identified & bit)) continue;
+            fputs(first ? "" : ", ", out);
+            string(out, loadid_ident_name(bit));
+            first = 0;
+        }
+        fputs("],\n   \"model_phi\": ", out);
+        array(out, e->model_phi, 10);
+        fprintf(out, ", \"projected\": %s", model && e->projected ? "true" : "false");
+        fprintf(out, ", \"complete\": %s", st->complete ? "true" : "false");
+        fputs(",\n   \"noise_scale\": ", out);
+        number(out, model ? e->noise_scale : NAN);
+        fputs(", \"model\": {\"mass\": ", out);
+        number(out, e->model_mass);
+        fputs(", \"com\": ", out);
+        array(out, e->model_com, 3);
+        fputs(", \"inertia_com\": ", out);
+        array(out, e->model_inertia_com, 6);
+        fputs("},\n   \"noise\": ", out);
+        levels(out, &st->noise);
+        if (ref && e->method == LOADID_METHOD_REFINED) {
+            fprintf(out, ",\n   \"refined\": {\"samples\": %lld, \"spec_from\": \"%s\", "
+                         "\"alpha_from\": \"%s\", \"sensor_spec_error\": ",
+                    (long long)ref->samples, ref->spec_from_sensor ? "sensor" : "joints",
+                    ref->alpha_from_sensor ? "sensor" : "joints");
+            number(out, ref->sensor_spec_error);
+            fputs(", \"sensor_alpha_error\": ", out);
+            number(out, ref->sensor_alpha_error);
+            fputs(", \"omega_rms\": ", out);
+            number(out, ref->omega_rms);
+            fputs(", \"levels\": ", out);
+            levels(out, &ref->levels);
+            fputc('}', out);
+        }
         if (!e->valid) {
             fputs(", \"error\": ", out);
             string(out, loadid_strerror(e->error));

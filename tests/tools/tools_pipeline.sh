@@ -25,9 +25,21 @@ test "$(wc -l < "$work/kappa.txt")" -eq 3
 
 printf 'estimation:\n  methods: [RTLS, RIV, RLS, LS_BATCH, TLS_BATCH]\n' > "$work/all.yaml"
 "$loadidd" --config "$work/all.yaml" --offline "$work/clean" --result "$work/clean.json"
-"$loadidd" --config "$work/all.yaml" --offline "$work/damaged" --verbose > "$work/damaged.json"
+# The damaged recording lacks joint data for 0.1 s of the window (the
+# stall): incomplete, so exit 3 and "complete": false, unless allowed.
+set +e
+"$loadidd" --config "$work/all.yaml" --offline "$work/damaged" > "$work/damaged.json" \
+    2> "$work/damaged.err"
+rc=$?
+set -e
+test "$rc" -eq 3 || { echo "damaged: expected exit 3, got $rc" >&2; cat "$work/damaged.err" >&2; exit 1; }
+grep -q "incomplete recording: joint data missing" "$work/damaged.err"
+"$loadidd" --config "$work/all.yaml" --offline "$work/damaged" --allow-incomplete --verbose \
+    > "$work/damaged.json"
 test "$(grep -c '"method"' "$work/clean.json")" -eq 5
 test "$(grep -c '"method"' "$work/damaged.json")" -eq 5
+test "$(grep -c '"complete": true' "$work/clean.json")" -eq 5
+test "$(grep -c '"complete": false' "$work/damaged.json")" -eq 5
 
 # Bad input: a clear one-line reason and exit status 1 or 2, never a crash.
 expect_refusal() {

@@ -677,8 +677,8 @@ static void wrong_lengths_and_values(void **state) {
 static void bad_names(void **state) {
     (void)state;
     expect_error("estimation:\n  methods: [RTLS, FOO]\n",
-                 "2: estimation.methods[1]: unknown method 'FOO' (RLS, RIV, RTLS, LS_BATCH or "
-                 "TLS_BATCH)");
+                 "2: estimation.methods[1]: unknown method 'FOO' (RLS, RIV, RTLS, LS_BATCH, "
+                 "TLS_BATCH or REFINED)");
     expect_error("estimation:\n  methods: [rtls]\n", "2: estimation.methods[0]: unknown method 'rtls'");
     expect_error("estimation:\n  methods:\n    - RTLS\n    - RIV\n    - RTLS\n",
                  "5: estimation.methods[2]: method RTLS listed twice (first as item 0)");

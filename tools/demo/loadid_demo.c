@@ -233,7 +233,7 @@ int main(int argc, char **argv) {
                "%.2f s; noise f %.3g N, tau %.3g Nm, a-g %.3g m/s^2, alpha %.3g rad/s^2; servo "
                "%.3g Hz, backlash %.3g rad, 2^20-count encoders\n",
                keep ? " in " : "", keep ? keep : "", (long long)sum.samples, sum.duration_s,
-               cfg.noise_force, cfg.noise_torque, cfg.noise_linear, cfg.noise_angular,
+               cfg.sim_noise_force, cfg.sim_noise_torque, cfg.sim_noise_linear, cfg.sim_noise_angular,
                cfg.sim_servo_bandwidth_hz, cfg.sim_backlash);
         loadid_pipeline_t *p = NULL;
         rc = loadid_pipeline_create(&cfg, &chain, NULL, 0, &p, err, sizeof err);

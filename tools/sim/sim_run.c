@@ -79,16 +79,16 @@ static void measure(sim_t *s, double t, const loadid_motion_t *m, double value[4
     loadid_synth_wrench(s->cfg.distal_phi, m, distal);
     for (int i = 0; i < 3; ++i) {
         value[LOADID_JR3_FORCE][i] = load[i] + distal[i] + s->cfg.sim_offset[i] +
-                                     s->cfg.noise_force * loadid_rng_normal(&s->rng);
+                                     s->cfg.sim_noise_force * loadid_rng_normal(&s->rng);
         value[LOADID_JR3_MOMENT][i] = load[3 + i] + distal[3 + i] + s->cfg.sim_offset[3 + i] +
-                                      s->cfg.noise_torque * loadid_rng_normal(&s->rng);
+                                      s->cfg.sim_noise_torque * loadid_rng_normal(&s->rng);
     }
     const double wt = kTwoPi * s->cfg.sim_vibration_hz * t;
     for (int i = 0; i < 3; ++i) {
-        value[LOADID_JR3_LINEAR][i] = m->spec[i] + s->cfg.noise_linear * loadid_rng_normal(&s->rng) +
+        value[LOADID_JR3_LINEAR][i] = m->spec[i] + s->cfg.sim_noise_linear * loadid_rng_normal(&s->rng) +
                                       s->cfg.sim_vibration_linear * sin(wt + s->vib_phase[0][i]);
         value[LOADID_JR3_ANGULAR][i] = m->alpha[i] +
-                                       s->cfg.noise_angular * loadid_rng_normal(&s->rng) +
+                                       s->cfg.sim_noise_angular * loadid_rng_normal(&s->rng) +
                                        s->cfg.sim_vibration_angular * sin(wt + s->vib_phase[1][i]);
     }
 }
@@ -198,7 +198,7 @@ static int write_truth(const sim_t *s, const char *dir, const char *traj_path,
     fprintf(f, "\noffset: ");
     list(f, c->sim_offset, 6);
     fprintf(f, "\nnoise:\n  force: %.17g\n  torque: %.17g\n  linear: %.17g\n  angular: %.17g\n",
-            c->noise_force, c->noise_torque, c->noise_linear, c->noise_angular);
+            c->sim_noise_force, c->sim_noise_torque, c->sim_noise_linear, c->sim_noise_angular);
     fprintf(f, "vibration:\n  hz: %.17g\n  linear: %.17g\n  angular: %.17g\n", c->sim_vibration_hz,
             c->sim_vibration_linear, c->sim_vibration_angular);
     fprintf(f, "servo:\n  bandwidth_hz: %.17g\n  damping: %.17g\n  backlash: %.17g\n",

@@ -39,7 +39,7 @@ extern "C" {
 #endif
 
 #define LOADID_PATH_MAX 4096
-#define LOADID_MAX_METHODS 5
+#define LOADID_MAX_METHODS 6
 
 /* sensor.type */
 enum { LOADID_SENSOR_JR3 = 0, LOADID_SENSOR_MODBUS = 1 };
@@ -121,14 +121,22 @@ typedef struct {
     char results_load[LOADID_PATH_MAX];
 
     /* noise: (loadid) standard deviations of the measurements, for the
-     * estimators' weights (loadid_est_weights_from_noise) and the
-     * trajectory designer's column scaling */
-    double noise_force;                 /* [N], default 0.1 */
-    double noise_torque;                /* [N m], default 0.005 */
-    double noise_linear;                /* a - g [m/s^2], default 0.5 */
-    double noise_angular;               /* alpha [rad/s^2], default 5 */
-    double noise_omega;                 /* [rad/s], default 0.02 */
-    double omega_typical;               /* [rad/s], default 2 */
+     * estimators' weights (loadid_est_weights_from_noise). "noise: auto"
+     * (the default, also any key given as auto) measures them
+     * (host/include/loadid/noise_model.h): the wrench and accelerometer
+     * channels in the zeroing window (or, without one, from the third
+     * differences of the samples), the joint-derived signals from the joint
+     * filter's own covariance. A number given overrides that level alone
+     * (its bit in noise_given). The values below are the fallbacks used
+     * when nothing could be measured. */
+    int noise_given;                    /* LOADID_NOISE_GIVEN_* bits */
+    double noise_force;                 /* [N], fallback 0.1 */
+    double noise_torque;                /* [N m], fallback 0.005 */
+    double noise_linear;                /* a - g [m/s^2], fallback 0.5 */
+    double noise_angular;               /* alpha [rad/s^2], fallback 5 */
+    double noise_omega;                 /* [rad/s], fallback 0.02 */
+    double omega_typical;               /* [rad/s], default 2 (a column scale,
+                                           not a noise: always as configured) */
 
     /* kalman: (loadid) the joint filters (loadid/joint_filter.h) */
     double kalman_jerk_psd;             /* default: loadid_jf_config_default */
@@ -142,6 +150,14 @@ typedef struct {
      * counts is about 1 rad/s^2 per joint). */
     double kalman_spec_sigma;
     double kalman_alpha_sigma;
+    /* model: (loadid) identified groups and the load model
+     * (firmware/include/loadid/load_model.h): thresholds and the fallback
+     * density of an unidentified inertia */
+    double model_mass_rel_std;          /* [-], default 0.05 */
+    double model_com_std;               /* [m], default 0.005 */
+    double model_inertia_rel_std;       /* [-], default 0.3 */
+    double model_max_gyration;          /* [m], default 0.5 */
+    double model_fallback_density;      /* [kg/m^3], default 2700 */
 
     /* trajectory: (loadid) the excitation designer, loadid-traj */
     double traj_base_frequency;         /* f of eq. (10) [Hz], default 0.5 */
@@ -185,7 +201,21 @@ typedef struct {
     double sim_offset[6];               /* F/T offset [N, N m], default
                                            [2 -1.5 3 0.08 -0.05 0.03] */
     uint64_t sim_seed;                  /* default 1 */
+    /* simulation.noise: the simulated sensor's noise [N, N m, m/s^2,
+     * rad/s^2]; default the noise.* numbers given, else 0.1, 0.005, 0.5, 5 */
+    double sim_noise_force, sim_noise_torque, sim_noise_linear, sim_noise_angular;
 } loadid_config_t;
+
+/* Bits of noise_given: which levels the configuration fixes. */
+enum {
+    LOADID_NOISE_GIVEN_FORCE = 1 << 0,
+    LOADID_NOISE_GIVEN_TORQUE = 1 << 1,
+    LOADID_NOISE_GIVEN_LINEAR = 1 << 2,
+    LOADID_NOISE_GIVEN_ANGULAR = 1 << 3,
+    LOADID_NOISE_GIVEN_OMEGA = 1 << 4,
+    LOADID_NOISE_GIVEN_KF_SPEC = 1 << 5,  /* kalman.spec_sigma */
+    LOADID_NOISE_GIVEN_KF_ALPHA = 1 << 6  /* kalman.alpha_sigma */
+};
 
 /* Fills cfg with every default (robot_urdf: the shipped RX60, given the
  * source tree root at build time). */

@@ -31,6 +31,8 @@
 #include "loadid/can_frame.h"
 #include "loadid/chain.h"
 #include "loadid/config.h"
+#include "loadid/noise_model.h"
+#include "loadid/refined.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -65,6 +67,16 @@ typedef struct {
     int physically_consistent;
     int valid;                    /* 0: no estimate yet (error says why) */
     int error;                    /* the core's code when !valid */
+    /* Filled in the final estimate (DONE) only, load_model_t's fields: */
+    int has_model;                /* 1 when the fields below are set */
+    double phi_std[10];           /* one standard deviation of each element
+                                     (+Inf: not determined by the data) */
+    double noise_scale;           /* a-posteriori noise scale s (1: the
+                                     weights' noise levels fit the data) */
+    int identified;               /* LOADID_IDENT_* bits (load_model.h) */
+    int projected;                /* model_phi differs from phi */
+    double model_phi[10];         /* physically consistent (load_model.h) */
+    double model_mass, model_com[3], model_inertia_com[6];
 } loadid_pipeline_estimate_t;
 
 /* Counters (status_t's and more). */
@@ -84,6 +96,12 @@ typedef struct {
     int64_t joint_msgs_bad;
     int64_t samples_stale;        /* no joint state close enough */
     int64_t estimator_errors;     /* updates refused (non-finite input, full) */
+    /* The last estimation run, once it ended: */
+    int complete;                 /* 1: ZERO (when zeroing) and START seen, the
+                                     window ran to its end (or STOP), joint
+                                     data for nearly all of it */
+    char incomplete_reason[192];  /* why not, else "" */
+    loadid_noise_levels_t noise;  /* the on-line estimators' noise levels */
 } loadid_pipeline_status_t;
 
 typedef struct {
@@ -153,8 +171,10 @@ typedef struct {
     double y0[6], g_init[3];
 } loadid_pipeline_compensation_t;
 
-/* The primary estimate (the first configured method with one) and its
- * compensation, once DONE. Returns 0, or -ENODATA (no estimate). */
+/* The primary estimate and its compensation, once DONE: the method whose
+ * load model has the most identified groups (ties: REFINED, then the
+ * configuration's order); phi_total is its physically consistent model
+ * with the distal part. Returns 0, or -ENODATA (no estimate). */
 int loadid_pipeline_final(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *est,
                           loadid_pipeline_compensation_t *comp);
 
@@ -163,6 +183,10 @@ int loadid_pipeline_final(const loadid_pipeline_t *p, loadid_pipeline_estimate_t
  * not finite, zeroing data missing for 10 parameters). */
 int loadid_pipeline_restore(loadid_pipeline_t *p, const loadid_pipeline_estimate_t *est,
                             const loadid_pipeline_compensation_t *comp);
+
+/* The REFINED run's report (refined.h); -ENODATA when REFINED is not
+ * configured or has not run. */
+int loadid_pipeline_refined_report(const loadid_pipeline_t *p, loadid_refined_report_t *out);
 
 /* Whether START was ever seen since create or RESET. */
 int loadid_pipeline_started(const loadid_pipeline_t *p);

@@ -1,0 +1,186 @@
+/* The measured noise model (noise_model.h). */
+#include "loadid/noise_model.h"
+
+#include <math.h>
+#include <string.h>
+
+#define D3_MIN 100
+#define D3_GAIN 20.0   /* var(x_k - 3 x_k-1 + 3 x_k-2 - x_k-3) / sigma^2 = 1 + 9 + 9 + 1 */
+#define MAD_TO_SIGMA 1.482602218505602 /* 1 / Phi^-1(3/4): sigma of a normal from its MAD */
+
+void loadid_noise_acc_reset(loadid_noise_acc_t *a) {
+    a->still_n = 0;
+    a->hist_n = 0;
+    a->last_t_us = 0;
+    a->d3_n = a->d3_head = 0;
+}
+
+void loadid_noise_acc_reset_still(loadid_noise_acc_t *a) { a->still_n = 0; }
+
+void loadid_noise_acc_still(loadid_noise_acc_t *a, const double x[LOADID_NOISE_CHANNELS]) {
+    if (a->still_n == LOADID_NOISE_STILL_MAX) return; /* the first ones are enough */
+    memcpy(a->still[a->still_n++], x, sizeof a->still[0]);
+}
+
+void loadid_noise_acc_moving(loadid_noise_acc_t *a, int64_t t_us, int64_t period_us,
+                             const double x[LOADID_NOISE_CHANNELS]) {
+    if (a->hist_n > 0 && (t_us <= a->last_t_us || t_us - a->last_t_us > 3 * period_us))
+        a->hist_n = 0; /* not consecutive: start again */
+    if (a->hist_n == 3) {
+        double *d = a->d3[a->d3_head];
+        for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i)
+            d[i] = x[i] - 3.0 * a->hist[2][i] + 3.0 * a->hist[1][i] - a->hist[0][i];
+        a->d3_head = (a->d3_head + 1) % LOADID_NOISE_D3_RING;
+        if (a->d3_n < LOADID_NOISE_D3_RING) a->d3_n++;
+        memmove(a->hist[0], a->hist[1], 2 * sizeof a->hist[0]);
+        memcpy(a->hist[2], x, sizeof a->hist[2]);
+    } else {
+        memcpy(a->hist[a->hist_n++], x, sizeof a->hist[0]);
+    }
+    a->last_t_us = t_us;
+}
+
+/* The k-th smallest of v[0..n) (Wirth's selection; v is reordered). */
+static double select_kth(double *v, int n, int k) {
+    int lo = 0, hi = n - 1;
+    while (lo < hi) {
+        const double x = v[k];
+        int i = lo, j = hi;
+        do {
+            while (v[i] < x) ++i;
+            while (x < v[j]) --j;
+            if (i <= j) {
+                const double t = v[i];
+                v[i++] = v[j];
+                v[j--] = t;
+            }
+        } while (i <= j);
+        if (j < k) lo = i;
+        if (k < i) hi = j;
+    }
+    return v[k];
+}
+
+/* The median of v[0..n) (the upper one for even n). */
+static double median(double *v, int n) { return select_kth(v, n, n / 2); }
+
+/* sigma of channel i of rows[0..n): 1.4826 median |x - center|, with
+ * center the median (centered) or 0. */
+static double mad_sigma(loadid_noise_acc_t *a, const double (*rows)[LOADID_NOISE_CHANNELS], int n,
+                        int i, int centered) {
+    for (int k = 0; k < n; ++k) a->scratch[k] = rows[k][i];
+    const double c = centered ? median(a->scratch, n) : 0.0;
+    for (int k = 0; k < n; ++k) a->scratch[k] = fabs(rows[k][i] - c);
+    return MAD_TO_SIGMA * median(a->scratch, n);
+}
+
+int loadid_noise_acc_sigma(loadid_noise_acc_t *a, int min_still,
+                           double sigma[LOADID_NOISE_CHANNELS]) {
+    if (a->still_n >= min_still && a->still_n >= 2) {
+        for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i)
+            sigma[i] = mad_sigma(a, (const double(*)[LOADID_NOISE_CHANNELS])a->still, a->still_n, i, 1);
+        return LOADID_NOISE_STILL;
+    }
+    if (a->d3_n >= D3_MIN) {
+        for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i)
+            sigma[i] = mad_sigma(a, (const double(*)[LOADID_NOISE_CHANNELS])a->d3, a->d3_n, i, 0) /
+                       sqrt(D3_GAIN);
+        return LOADID_NOISE_DIFFERENCES;
+    }
+    memset(sigma, 0, LOADID_NOISE_CHANNELS * sizeof sigma[0]);
+    return LOADID_NOISE_FALLBACK;
+}
+
+int loadid_noise_joint_levels(const loadid_kin_t *kin, const loadid_real_t *q, double sigma_qd,
+                              double sigma_qdd, double *spec, double *alpha, double *omega) {
+    const int n = loadid_kin_num_joints(kin);
+    loadid_real_t zero[LOADID_MAX_JOINTS] = {0}, unit[LOADID_MAX_JOINTS] = {0};
+    loadid_kin_state_t base, k;
+    int rc = loadid_kin_eval(kin, q, zero, zero, &base);
+    if (rc) return rc;
+    double s2 = 0, a2 = 0, w2 = 0;
+    for (int j = 0; j < n && rc == 0; ++j) {
+        unit[j] = 1;
+        /* alpha and a - g are linear in qdd (qd = 0), omega in qd. */
+        rc = loadid_kin_eval(kin, q, zero, unit, &k);
+        for (int i = 0; i < 3 && rc == 0; ++i) {
+            const double ds = (double)(k.spec[i] - base.spec[i]), da = (double)(k.alpha[i] - base.alpha[i]);
+            s2 += ds * ds;
+            a2 += da * da;
+        }
+        if (rc == 0) rc = loadid_kin_eval(kin, q, unit, zero, &k);
+        for (int i = 0; i < 3 && rc == 0; ++i) w2 += (double)k.omega[i] * (double)k.omega[i];
+        unit[j] = 0;
+    }
+    if (rc) return rc;
+    /* Independent joints; per axis of S, the mean over x, y, z. */
+    *spec = sigma_qdd * sqrt(s2 / 3.0);
+    *alpha = sigma_qdd * sqrt(a2 / 3.0);
+    *omega = sigma_qd * sqrt(w2 / 3.0);
+    return 0;
+}
+
+/* RMS of three channels' levels. */
+static double rms3(const double *v) { return sqrt((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) / 3.0); }
+
+/* One level: configured, else measured (never below a thousandth of the
+ * fallback, so a noise-free channel does not get an infinite weight), else
+ * the fallback. */
+static double pick(int given, double configured, double measured, int measured_source,
+                   int *source) {
+    if (given) {
+        *source = LOADID_NOISE_CONFIGURED;
+        return configured;
+    }
+    if (measured_source != LOADID_NOISE_FALLBACK && measured > 0) {
+        *source = measured_source;
+        return fmax(measured, configured * 1e-3);
+    }
+    *source = LOADID_NOISE_FALLBACK;
+    return configured;
+}
+
+void loadid_noise_combine(const loadid_config_t *cfg, int jr3_spec, int jr3_alpha,
+                          const double channel[LOADID_NOISE_CHANNELS], int channel_source,
+                          double joint_spec, double joint_alpha, double joint_omega,
+                          loadid_noise_levels_t *out) {
+    memset(out, 0, sizeof *out);
+    const int g = cfg->noise_given;
+    memcpy(out->channel, channel, sizeof out->channel);
+    out->channel_source = channel_source;
+    out->joint_spec = joint_spec;
+    out->joint_alpha = joint_alpha;
+    out->joint_omega = joint_omega;
+    const int js = joint_spec > 0 ? LOADID_NOISE_FILTER : LOADID_NOISE_FALLBACK;
+    out->force = pick(g & LOADID_NOISE_GIVEN_FORCE, cfg->noise_force, rms3(channel), channel_source,
+                      &out->source[0]);
+    out->torque = pick(g & LOADID_NOISE_GIVEN_TORQUE, cfg->noise_torque, rms3(channel + 3),
+                       channel_source, &out->source[1]);
+    out->spec = jr3_spec ? pick(g & LOADID_NOISE_GIVEN_LINEAR, cfg->noise_linear, rms3(channel + 6),
+                                channel_source, &out->source[2])
+                         : pick(g & LOADID_NOISE_GIVEN_KF_SPEC, cfg->kalman_spec_sigma, joint_spec,
+                                js, &out->source[2]);
+    out->alpha = jr3_alpha ? pick(g & LOADID_NOISE_GIVEN_ANGULAR, cfg->noise_angular,
+                                  rms3(channel + 9), channel_source, &out->source[3])
+                           : pick(g & LOADID_NOISE_GIVEN_KF_ALPHA, cfg->kalman_alpha_sigma,
+                                  joint_alpha, js, &out->source[3]);
+    out->omega = pick(g & LOADID_NOISE_GIVEN_OMEGA, cfg->noise_omega, joint_omega, js,
+                      &out->source[4]);
+}
+
+int loadid_noise_weights(const loadid_noise_levels_t *lv, double omega_typical,
+                         loadid_est_config_t *est) {
+    return loadid_est_weights_from_noise(est, (loadid_real_t)lv->force, (loadid_real_t)lv->torque,
+                                         (loadid_real_t)lv->spec, (loadid_real_t)lv->alpha,
+                                         (loadid_real_t)lv->omega, (loadid_real_t)omega_typical);
+}
+
+const char *loadid_noise_source_name(int source) {
+    switch (source) {
+        case LOADID_NOISE_STILL: return "zeroing";
+        case LOADID_NOISE_DIFFERENCES: return "differences";
+        case LOADID_NOISE_CONFIGURED: return "configured";
+        case LOADID_NOISE_FILTER: return "joint filter";
+        default: return "fallback";
+    }
+}
