@@ -7,6 +7,7 @@
 
 #include "loadid/config.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -346,6 +347,15 @@ static int read_can_jr3_lcm(loadid_yaml_node_t *root, loadid_config_t *c) {
             return loadid_yaml_fail(n, "expected an LCM URL such as "
                                        "udpm://239.255.76.67:7667?ttl=0, got '%s'", url);
         memcpy(c->lcm_url, url, sizeof url);
+    }
+    if ((n = loadid_yaml_get(s, "channel_prefix")) && !loadid_yaml_is_null(n)) {
+        char prefix[sizeof c->lcm_channel_prefix];
+        TRY(loadid_yaml_as_string(n, prefix, sizeof prefix));
+        for (const char *ch = prefix; *ch; ++ch)
+            if (!isalnum((unsigned char)*ch) && !strchr("_-./", *ch))
+                return loadid_yaml_fail(n, "a channel name prefix of letters, digits, '_', '-', "
+                                           "'.' and '/' only, got '%s'", prefix);
+        memcpy(c->lcm_channel_prefix, prefix, sizeof prefix);
     }
     return 0;
 fail:
@@ -705,4 +715,8 @@ fail:
     free(c);
     loadid_yaml_free(doc);
     return -1;
+}
+
+void loadid_config_channel(const loadid_config_t *cfg, const char *name, char *out, size_t len) {
+    snprintf(out, len, "%s%s", cfg->lcm_channel_prefix, name);
 }

@@ -49,6 +49,7 @@
 #include "loadid/lcm_udpm.h"
 #include "loadid/lcm_wire.h"
 #include "loadid/pipeline.h"
+#include "loadid/setup.h"
 #include "loadid/socketcan.h"
 #include "modbus_input.h"
 #include "realtime.h"
@@ -61,7 +62,13 @@ _Static_assert(LOADID_LCM_NAME_MAX == LOADID_LOAD_NAME_MAX, "load_name fits both
 
 /* The loop's LCM buffers: one message out at a time, one datagram in
  * (65536 holds any UDP datagram). */
-static uint8_t tx_buf[LOADID_LCM_ESTIMATE_MAX];
+#define TX_MAX (LOADID_LCM_ESTIMATE_MAX > LOADID_LCM_LOAD_MODEL_MAX ? LOADID_LCM_ESTIMATE_MAX \
+                                                                   : LOADID_LCM_LOAD_MODEL_MAX)
+static uint8_t tx_buf[TX_MAX];
+
+/* The channels, with lcm.channel_prefix, made once at start-up. */
+enum { CH_JOINTS, CH_COMMAND, CH_ESTIMATE, CH_WRENCH, CH_STATUS, CH_MODEL, CH_COUNT };
+static char channels[CH_COUNT][128];
 static uint8_t rx_buf[65536];
 
 typedef struct {
@@ -131,7 +138,7 @@ static void on_estimate(void *ctx, const loadid_pipeline_estimate_t *e) {
     m.condition_number = e->condition_number;
     m.sigma_min = e->sigma_min;
     m.physically_consistent = (int8_t)e->physically_consistent;
-    publish(L, "LOADID_ESTIMATE", loadid_lcm_encode_estimate(&m, tx_buf, sizeof tx_buf));
+    publish(L, channels[CH_ESTIMATE], loadid_lcm_encode_estimate(&m, tx_buf, sizeof tx_buf));
 }
 
 static void on_wrench(void *ctx, int64_t utime, const double f[3], const double t[3]) {
@@ -140,7 +147,7 @@ static void on_wrench(void *ctx, int64_t utime, const double f[3], const double 
     m.utime = utime;
     memcpy(m.force, f, sizeof m.force);
     memcpy(m.torque, t, sizeof m.torque);
-    publish(L, "LOADID_WRENCH", loadid_lcm_encode_wrench(&m, tx_buf, sizeof tx_buf));
+    publish(L, channels[CH_WRENCH], loadid_lcm_encode_wrench(&m, tx_buf, sizeof tx_buf));
 }
 
 static void on_state(void *ctx, int64_t utime, int state, const char *reason) {
@@ -207,7 +214,7 @@ static void publish_status(live_t *L) {
     }
     m.joint_msgs_bad = st.joint_msgs_bad;
     loop_stats(L, &m.loop_us_p50, &m.loop_us_p99, &m.loop_us_max);
-    publish(L, "LOADID_STATUS", loadid_lcm_encode_status(&m, tx_buf, sizeof tx_buf));
+    publish(L, channels[CH_STATUS], loadid_lcm_encode_status(&m, tx_buf, sizeof tx_buf));
 }
 
 /* ------------------------------------------------------------- inputs */
@@ -229,7 +236,7 @@ static void on_command(live_t *L, const uint8_t *data, size_t len) {
     if (rc < 0) {
         const double now_mono = mono_us();
         if (now_mono - L->command_warned_us > 1e6) { /* at most one line a second */
-            fprintf(stderr, "loadidd: LOADID_COMMAND: %s; ignored\n", loadid_lcm_strerror(rc));
+            fprintf(stderr, "loadidd: %s: %s; ignored\n", channels[CH_COMMAND], loadid_lcm_strerror(rc));
             L->command_warned_us = now_mono;
         }
         return;
@@ -244,9 +251,9 @@ static void on_command(live_t *L, const uint8_t *data, size_t len) {
 /* One LCM message; other channels (the daemon's own output, looped back
  * by multicast, and anyone else's) are ignored. Returns 1 when it was an
  * input. */
-static int on_message(live_t *L, const char *channel, const uint8_t *data, size_t len) {
-    if (strcmp(channel, "LOADID_JOINTS") == 0) on_joints(L, data, len);
-    else if (strcmp(channel, "LOADID_COMMAND") == 0) on_command(L, data, len);
+static int on_message(live_t *L, const char *name, const uint8_t *data, size_t len) {
+    if (strcmp(name, channels[CH_JOINTS]) == 0) on_joints(L, data, len);
+    else if (strcmp(name, channels[CH_COMMAND]) == 0) on_command(L, data, len);
     else return 0;
     return 1;
 }
@@ -345,12 +352,33 @@ static int add_fd(int ep, int fd, uint32_t tag) {
     return epoll_ctl(ep, EPOLL_CTL_ADD, fd, &ev);
 }
 
-/* A finished estimate into results.directory (when configured). */
+/* load_model_t of the primary estimate on LOADID_MODEL. */
+static void publish_model(live_t *L, const loadid_pipeline_estimate_t *e) {
+    loadid_lcm_load_model_t m;
+    memset(&m, 0, sizeof m);
+    m.utime = e->utime;
+    m.method = (int8_t)e->method;
+    memcpy(m.load_name, e->load_name, sizeof m.load_name);
+    m.load_name[sizeof m.load_name - 1] = 0;
+    m.identified = (int8_t)e->identified;
+    m.projected = (int8_t)e->projected;
+    memcpy(m.phi, e->model_phi, sizeof m.phi);
+    memcpy(m.phi_std, e->phi_std, sizeof m.phi_std);
+    m.mass = e->model_mass;
+    memcpy(m.com, e->model_com, sizeof m.com);
+    memcpy(m.inertia_com, e->model_inertia_com, sizeof m.inertia_com);
+    publish(L, channels[CH_MODEL], loadid_lcm_encode_load_model(&m, tx_buf, sizeof tx_buf));
+}
+
+/* DONE: the best load model out on LOADID_MODEL, and the estimate into
+ * results.directory (when configured). */
 static void save_done(live_t *L) {
     L->done_pending = 0;
     loadid_pipeline_estimate_t e;
     loadid_pipeline_compensation_t c;
-    if (!L->cfg->results_directory[0] || loadid_pipeline_final(L->pipe, &e, &c) != 0) return;
+    if (loadid_pipeline_final(L->pipe, &e, &c) != 0) return;
+    if (e.has_model) publish_model(L, &e);
+    if (!L->cfg->results_directory[0]) return;
     char path[4400], err[4600];
     if (loadid_saved_result_write(L->cfg->results_directory, &e, &c, path, sizeof path, err,
                                   sizeof err) != 0)
@@ -365,6 +393,10 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     const loadid_live_options_t *opt) {
     static live_t L; /* large (the histogram); one per process */
     memset(&L, 0, sizeof L);
+    static const char *const names[CH_COUNT] = {"LOADID_JOINTS", "LOADID_COMMAND",
+                                                "LOADID_ESTIMATE", "LOADID_WRENCH",
+                                                "LOADID_STATUS", "LOADID_MODEL"};
+    for (int i = 0; i < CH_COUNT; ++i) loadid_config_channel(cfg, names[i], channels[i], sizeof channels[i]);
     L.cfg = cfg;
     L.opt = opt;
     L.can_fd = -1;
@@ -417,11 +449,12 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
             return 1;
         }
         fprintf(stderr, "loadidd: loaded %s (%s): wrench_t flows\n", cfg->results_load, e.load_name);
+        if (e.has_model) publish_model(&L, &e);
     }
     int lcm_fd = L.lcm_rx_fd;
     if (!L.udpm) {
-        lcm_subscribe(L.lcm, "LOADID_JOINTS", on_lcm_raw, &L);
-        lcm_subscribe(L.lcm, "LOADID_COMMAND", on_lcm_raw, &L);
+        lcm_subscribe(L.lcm, channels[CH_JOINTS], on_lcm_raw, &L);
+        lcm_subscribe(L.lcm, channels[CH_COMMAND], on_lcm_raw, &L);
         lcm_fd = lcm_get_fileno(L.lcm);
     }
 

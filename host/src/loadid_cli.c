@@ -108,24 +108,27 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s: cannot open LCM at %s\n", prog, url ? url : cfg.lcm_url);
         return 1;
     }
+    char command[128], status[128];
+    loadid_config_channel(&cfg, "LOADID_COMMAND", command, sizeof command);
+    loadid_config_channel(&cfg, "LOADID_STATUS", status, sizeof status);
     int rc = 0;
     if (action) {
         loadid_command_t m = {.utime = now_us(), .action = (int8_t)action,
                               .load_name = (char *)load_name};
-        if (loadid_command_t_publish(lcm, "LOADID_COMMAND", &m) != 0) {
-            fprintf(stderr, "%s: cannot publish on LOADID_COMMAND\n", prog);
+        if (loadid_command_t_publish(lcm, command, &m) != 0) {
+            fprintf(stderr, "%s: cannot publish on %s\n", prog, command);
             rc = 1;
         }
     } else {
-        loadid_status_t_subscribe(lcm, "LOADID_STATUS", on_status, NULL);
+        loadid_status_t_subscribe(lcm, status, on_status, NULL);
         const int64_t end = now_us() + (int64_t)(timeout * 1e6);
         while (!got_status && now_us() < end) {
             struct pollfd pfd = {.fd = lcm_get_fileno(lcm), .events = POLLIN};
             if (poll(&pfd, 1, 100) > 0) lcm_handle(lcm);
         }
         if (!got_status) {
-            fprintf(stderr, "%s: no status_t on LOADID_STATUS within %.3g s: is loadidd running?\n",
-                    prog, timeout);
+            fprintf(stderr, "%s: no status_t on %s within %.3g s: is loadidd running?\n", prog,
+                    status, timeout);
             rc = 1;
         }
     }

@@ -668,6 +668,8 @@ int loadid_pipeline_estimates(const loadid_pipeline_t *p, loadid_pipeline_estima
 
 int loadid_pipeline_started(const loadid_pipeline_t *p) { return p->started; }
 
+const loadid_config_t *loadid_pipeline_config(const loadid_pipeline_t *p) { return &p->cfg; }
+
 int loadid_pipeline_final(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *est,
                           loadid_pipeline_compensation_t *comp) {
     if (p->state != LOADID_STATE_DONE || p->primary < 0) return -ENODATA;

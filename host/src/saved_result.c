@@ -35,8 +35,34 @@ __attribute__((format(printf, 2, 3))) static void add(doc_t *d, const char *fmt,
 
 static void list(doc_t *d, const double *v, int n) {
     add(d, "[");
-    for (int i = 0; i < n; ++i) add(d, "%s%.17g", i ? ", " : "", v[i]);
+    for (int i = 0; i < n; ++i) {
+        if (isfinite(v[i]))
+            add(d, "%s%.17g", i ? ", " : "", v[i]);
+        else /* YAML's spelling; only phi_std (not read back) can be infinite */
+            add(d, "%s%s", i ? ", " : "", isnan(v[i]) ? ".nan" : v[i] > 0 ? ".inf" : "-.inf");
+    }
     add(d, "]");
+}
+
+/* The load model (load_model_t): what a controller should use. */
+static void format_model(doc_t *d, const loadid_pipeline_estimate_t *e) {
+    add(d, "model:   # physically consistent; the URDF <inertial> below is this\n"
+           "  identified: [");
+    int first = 1;
+    for (int bit = LOADID_IDENT_MASS; bit <= LOADID_IDENT_INERTIA; bit <<= 1)
+        if (e->identified & bit) {
+            add(d, "%s%s", first ? "" : ", ", loadid_ident_name(bit));
+            first = 0;
+        }
+    add(d, "]\n  projected: %s\n  phi: ", e->projected ? "true" : "false");
+    list(d, e->model_phi, 10);
+    add(d, "\n  phi_std: ");
+    list(d, e->phi_std, 10);
+    add(d, "\n  mass: %.17g\n  com: ", e->model_mass);
+    list(d, e->model_com, 3);
+    add(d, "\n  inertia_com: ");
+    list(d, e->model_inertia_com, 6);
+    add(d, "\n");
 }
 
 static void format_doc(doc_t *d, const loadid_pipeline_estimate_t *e,
@@ -57,19 +83,24 @@ static void format_doc(doc_t *d, const loadid_pipeline_estimate_t *e,
     list(d, e->inertia_com, 6);
     add(d, "\ncondition_number: %.17g\nphysically_consistent: %s\n", e->condition_number,
         e->physically_consistent ? "true" : "false");
+    if (e->has_model) format_model(d, e);
     add(d, "compensation:\n  n_params: %d\n  phi_total: ", c->n_params);
     list(d, c->phi_total, c->n_params);
     add(d, "\n  zeroed: %s\n  y0: ", c->zeroed ? "true" : "false");
     list(d, c->y0, 6);
     add(d, "\n  g_init: ");
     list(d, c->g_init, 3);
-    /* URDF <inertial>: origin at the COM, inertia about it in S's axes. */
+    /* URDF <inertial>: origin at the COM, inertia about it in S's axes; the
+     * physically consistent model when there is one (a simulator or a
+     * controller refuses an impossible inertia). */
+    const double mass = e->has_model ? e->model_mass : e->mass;
+    const double *com = e->has_model ? e->model_com : e->com;
+    const double *in = e->has_model ? e->model_inertia_com : e->inertia_com;
     add(d, "\nurdf_inertial: |\n  <inertial>\n"
            "    <origin xyz=\"%.9g %.9g %.9g\" rpy=\"0 0 0\"/>\n    <mass value=\"%.9g\"/>\n"
            "    <inertia ixx=\"%.9g\" ixy=\"%.9g\" ixz=\"%.9g\" iyy=\"%.9g\" iyz=\"%.9g\" "
            "izz=\"%.9g\"/>\n  </inertial>\n",
-        e->com[0], e->com[1], e->com[2], e->mass, e->inertia_com[0], e->inertia_com[1],
-        e->inertia_com[2], e->inertia_com[3], e->inertia_com[4], e->inertia_com[5]);
+        com[0], com[1], com[2], mass, in[0], in[1], in[2], in[3], in[4], in[5]);
 }
 
 /* path.tmp, then renamed over path: a reader never sees half a file. */
@@ -105,7 +136,7 @@ int loadid_saved_result_write(const char *dir, const loadid_pipeline_estimate_t 
     safe[k] = 0;
     snprintf(name, sizeof name, "%s/%s-%lld.yaml", dir, k ? safe : "load", (long long)est->utime);
     snprintf(latest, sizeof latest, "%s/latest.yaml", dir);
-    char text[8192]; /* about 2.5 kB: 54 numbers of up to 24 characters, the name, the text */
+    char text[8192]; /* about 3.5 kB: 84 numbers of up to 24 characters, the name, the text */
     doc_t d = {text, sizeof text, 0, 0};
     format_doc(&d, est, comp);
     int rc = d.over ? -EOVERFLOW : 0;
@@ -165,6 +196,31 @@ static int read_doc(loadid_yaml_doc_t *doc, loadid_pipeline_estimate_t *e,
         (rc = need(loadid_yaml_get_doubles(comp, "y0", c->y0, 6), comp, "y0")) ||
         (rc = need(loadid_yaml_get_doubles(comp, "g_init", c->g_init, 3), comp, "g_init")))
         return rc;
+    /* The model is read back for what it is used for (its values);
+     * phi_std and identified are for people and other programs. */
+    loadid_yaml_node_t *model = NULL;
+    if ((rc = loadid_yaml_get_mapping(root, "model", &model)) < 0) return rc;
+    if (model) {
+        if ((rc = need(loadid_yaml_get_doubles(model, "phi", e->model_phi, 10), model, "phi")) ||
+            (rc = need(loadid_yaml_get_double(model, "mass", &e->model_mass), model, "mass")) ||
+            (rc = need(loadid_yaml_get_doubles(model, "com", e->model_com, 3), model, "com")) ||
+            (rc = need(loadid_yaml_get_doubles(model, "inertia_com", e->model_inertia_com, 6), model, "inertia_com")) ||
+            (rc = need(loadid_yaml_get_bool(model, "projected", &e->projected), model, "projected")))
+            return rc;
+        loadid_yaml_node_t *ids = loadid_yaml_get(model, "identified");
+        for (size_t i = 0; ids && i < loadid_yaml_count(ids); ++i) {
+            char w[16];
+            const loadid_yaml_node_t *item = loadid_yaml_item(ids, i);
+            if (loadid_yaml_as_string(item, w, sizeof w)) return -EINVAL;
+            int bit = LOADID_IDENT_MASS;
+            while (bit <= LOADID_IDENT_INERTIA && strcmp(w, loadid_ident_name(bit)) != 0) bit <<= 1;
+            if (bit > LOADID_IDENT_INERTIA) return loadid_yaml_fail(item, "unknown group '%s'", w);
+            e->identified |= bit;
+        }
+        loadid_yaml_get(model, "phi_std"); /* .inf where undetermined: not read back */
+        for (int i = 0; i < 10; ++i) e->phi_std[i] = NAN;
+        e->has_model = 1;
+    }
     return 0;
 }
 

@@ -176,9 +176,12 @@ int main(int argc, char **argv) {
     /* LCM queues 30 messages per subscription and drops the rest; a
      * recorder held up (a slow disk, an emulated CPU) must not lose joint
      * states: room for 100 s of them at 1 kHz. */
+    char joints[128], command[128]; /* with lcm.channel_prefix */
+    loadid_config_channel(&cfg, "LOADID_JOINTS", joints, sizeof joints);
+    loadid_config_channel(&cfg, "LOADID_COMMAND", command, sizeof command);
     lcm_subscription_t *subs[2] = {
-        lcm_subscribe(lcm, all_channels ? ".*" : "LOADID_JOINTS", on_lcm, &sink),
-        all_channels ? NULL : lcm_subscribe(lcm, "LOADID_COMMAND", on_lcm, &sink)};
+        lcm_subscribe(lcm, all_channels ? ".*" : joints, on_lcm, &sink),
+        all_channels ? NULL : lcm_subscribe(lcm, command, on_lcm, &sink)};
     for (int i = 0; i < 2; ++i)
         if (subs[i]) lcm_subscription_set_queue_capacity(subs[i], 100000);
 

@@ -50,15 +50,22 @@ static void sleep_until(int64_t t_us) {
     }
 }
 
-/* Re-publishes an LCM event with its utime moved to now's time base. */
+/* Whether channel is name, after any lcm.channel_prefix. */
+static int is_channel(const char *channel, const char *name) {
+    const size_t c = strlen(channel), n = strlen(name);
+    return c >= n && strcmp(channel + c - n, name) == 0;
+}
+
+/* Re-publishes an LCM event with its utime moved to now's time base, on
+ * the channel it was recorded on. */
 static void republish(lcm_t *lcm, const loadid_rec_event_t *ev, int64_t shift) {
-    if (strcmp(ev->channel, "LOADID_JOINTS") == 0) {
+    if (is_channel(ev->channel, "LOADID_JOINTS")) {
         loadid_joint_state_t m;
         if (loadid_joint_state_t_decode(ev->data, 0, ev->datalen, &m) < 0) return;
         m.utime += shift;
         loadid_joint_state_t_publish(lcm, ev->channel, &m);
         loadid_joint_state_t_decode_cleanup(&m);
-    } else if (strcmp(ev->channel, "LOADID_COMMAND") == 0) {
+    } else if (is_channel(ev->channel, "LOADID_COMMAND")) {
         loadid_command_t m;
         if (loadid_command_t_decode(ev->data, 0, ev->datalen, &m) < 0) return;
         m.utime += shift;

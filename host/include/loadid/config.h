@@ -64,6 +64,10 @@ typedef struct {
 
     /* lcm: */
     char lcm_url[256];                  /* default udpm://239.255.76.67:7667?ttl=0 */
+    char lcm_channel_prefix[64];        /* default "": put before every channel name
+                                           (several robots on one LCM network: "R2_"
+                                           gives R2_LOADID_ESTIMATE ...); letters,
+                                           digits, '_', '-', '.', '/' only */
 
     /* estimation: */
     int num_methods;                    /* default 3: RTLS, RIV, RLS */
@@ -220,6 +224,11 @@ enum {
 /* Fills cfg with every default (robot_urdf: the shipped RX60, given the
  * source tree root at build time). */
 void loadid_config_default(loadid_config_t *cfg);
+
+/* The LCM channel name lcm.channel_prefix + name into out (name is one of
+ * the contract's: "LOADID_JOINTS", "LOADID_COMMAND", "LOADID_ESTIMATE",
+ * "LOADID_WRENCH", "LOADID_STATUS", "LOADID_MODEL"). */
+void loadid_config_channel(const loadid_config_t *cfg, const char *name, char *out, size_t len);
 
 /* Called for each warning (an unknown key); msg is a full line. */
 typedef void (*loadid_config_warn_fn)(void *ctx, const char *msg);

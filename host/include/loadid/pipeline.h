@@ -188,6 +188,9 @@ int loadid_pipeline_restore(loadid_pipeline_t *p, const loadid_pipeline_estimate
  * configured or has not run. */
 int loadid_pipeline_refined_report(const loadid_pipeline_t *p, loadid_refined_report_t *out);
 
+/* The configuration the pipeline was created with. */
+const loadid_config_t *loadid_pipeline_config(const loadid_pipeline_t *p);
+
 /* Whether START was ever seen since create or RESET. */
 int loadid_pipeline_started(const loadid_pipeline_t *p);
 
