@@ -101,7 +101,7 @@ public:
 
     int uncertainty(const Real *phi, Real *std, Real *scale) const override {
         const CovKind kind = cfg.method == LOADID_METHOD_LS_BATCH ? CovKind::LS : CovKind::TLS;
-        const CovInput in{kind, N, excitation_.gram().data(), t_.data(), samples_, phi, nullptr,
+        const CovInput in{kind, N, excitation_.gram().data(), excitation_.gram_torque().data(), t_.data(), samples_, phi, nullptr,
                           nullptr};
         return covariance_std(in, std, scale);
     }

@@ -26,7 +26,10 @@ class Excitation {
 public:
     Excitation(const Vec6 &row_weight, const Vec<N1> &col_weight) : d_(row_weight), t_(col_weight) { reset(); }
 
-    void reset() { gram_.setZero(); }
+    void reset() {
+        gram_.setZero();
+        gram_torque_.setZero();
+    }
 
     void set_weights(const Vec6 &row_weight, const Vec<N1> &col_weight) {
         d_ = row_weight;
@@ -45,11 +48,17 @@ public:
         // loop sums in the order of Eigen's selfadjointView().rankUpdate()
         // (the same bits; the trajectory designer's search is chaotic in
         // them) at a third of its cost, which was its blocked GEMM kernel.
+        // The torque rows' share is kept apart as well, for the covariance
+        // (uncertainty.hpp): force and torque rows carry different residual
+        // noise. gram_ itself keeps its summation order and bits.
+        gram_torque_ = forgetting * gram_torque_;
         for (int j = 0; j < N1; ++j)
             for (int i = j; i < N1; ++i) {
-                Real acc = 0;
+                Real acc = 0, torque = 0;
                 for (int k = 0; k < LOADID_NROWS; ++k) acc += W(k, i) * W(k, j);
+                for (int k = 3; k < LOADID_NROWS; ++k) torque += W(k, i) * W(k, j);
                 gram_(i, j) += acc;
+                gram_torque_(i, j) += torque;
             }
     }
 
@@ -74,15 +83,18 @@ public:
         return std::sqrt(l0 / l1);
     }
 
-    // The information matrix (lower triangle valid) and the weights it was
-    // built with, for the covariance of an estimate (uncertainty.hpp).
+    // The information matrix (lower triangle valid), its torque rows' part,
+    // and the weights it was built with, for the covariance of an estimate
+    // (uncertainty.hpp).
     const Eigen::Matrix<Real, N1, N1> &gram() const { return gram_; }
+    const Eigen::Matrix<Real, N1, N1> &gram_torque() const { return gram_torque_; }
     const Vec<N1> &col_weight() const { return t_; }
 
 private:
     Vec6 d_;
     Vec<N1> t_;
     Eigen::Matrix<Real, N1, N1> gram_;
+    Eigen::Matrix<Real, N1, N1> gram_torque_;
 };
 
 inline Vec6 row_weights(const loadid_est_config_t &cfg) {

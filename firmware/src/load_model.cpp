@@ -28,12 +28,15 @@ Real sphere_moment(Real m, Real rho) {
     return Real(0.4) * m * r * r;
 }
 
-// Sigma_C = tr(I_C)/2 E - I_C clipped to the positive semidefinite cone
-// (eigenvalues below 0 set to 0), back to I_C = tr(Sigma_C) E - Sigma_C.
+// Sigma_C = tr(I_C)/2 E - I_C clipped to the positive semidefinite cone,
+// back to I_C = tr(Sigma_C) E - Sigma_C. The floor is a millionth of the
+// largest eigenvalue rather than 0, so the model is strictly consistent (a
+// thin plate, not a plane) and passes loadid_phi_to_physical's checks.
 Mat3 consistent_inertia(const Mat3 &Ic) {
     const Mat3 sigma = Real(0.5) * Ic.trace() * Mat3::Identity() - Ic;
     const Eigen::SelfAdjointEigenSolver<Mat3> es(sigma);
-    const Vec3 l = es.eigenvalues().cwiseMax(Real(0));
+    const Real floor = Real(1e-6) * std::max(es.eigenvalues()(2), Real(0));
+    const Vec3 l = es.eigenvalues().cwiseMax(floor);
     const Mat3 s = es.eigenvectors() * l.asDiagonal() * es.eigenvectors().transpose();
     return s.trace() * Mat3::Identity() - s;
 }

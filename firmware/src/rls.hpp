@@ -75,7 +75,7 @@ public:
     }
 
     int uncertainty(const Real *phi, Real *std, Real *scale) const override {
-        const CovInput in{instrumental_ ? CovKind::IV : CovKind::LS, N, excitation_.gram().data(),
+        const CovInput in{instrumental_ ? CovKind::IV : CovKind::LS, N, excitation_.gram().data(), excitation_.gram_torque().data(),
                           excitation_.col_weight().data(), samples_, phi,
                           instrumental_ ? M_.data() : nullptr, instrumental_ ? CC_.data() : nullptr};
         return covariance_std(in, std, scale);

@@ -114,7 +114,7 @@ public:
     }
 
     int uncertainty(const Real *phi, Real *std, Real *scale) const override {
-        const CovInput in{CovKind::TLS, N, excitation_.gram().data(), t_.data(), samples_, phi,
+        const CovInput in{CovKind::TLS, N, excitation_.gram().data(), excitation_.gram_torque().data(), t_.data(), samples_, phi,
                           nullptr, nullptr};
         return covariance_std(in, std, scale);
     }

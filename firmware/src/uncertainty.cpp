@@ -41,52 +41,56 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
     const int n = in.n, n1 = n + 1;
     for (int i = 0; i < n; ++i) std[i] = std::numeric_limits<Real>::infinity();
     *scale = std::numeric_limits<Real>::quiet_NaN();
-    const double dof = 6.0 * static_cast<double>(in.samples) - n;
-    if (!(dof >= 1)) return LOADID_E_NOT_EXCITED;
-    const Md gs = symmetric(in.gram, n1);  // D [A y] T, weighted and scaled
+    const double rows = 6.0 * static_cast<double>(in.samples), dof = rows - n;
+    if (!(dof >= 2)) return LOADID_E_NOT_EXCITED;
     Vd t(n1);
     for (int j = 0; j < n1; ++j) t(j) = static_cast<double>(in.t[j]);
     Vd phi(n);
     for (int j = 0; j < n; ++j) phi(j) = static_cast<double>(in.phi[j]);
-    // Without the column weights: sum [A y]^T D^2 [A y].
+    // Without the column weights: sum [A y]^T D^2 [A y], all rows and the
+    // torque rows.
+    const Md gs = symmetric(in.gram, n1);
     const Md g = t.cwiseInverse().asDiagonal() * gs * t.cwiseInverse().asDiagonal();
+    const Md gt = t.cwiseInverse().asDiagonal() * symmetric(in.gram_torque, n1) *
+                  t.cwiseInverse().asDiagonal();
+    const Md gf = g - gt;
+    // The residual's variance per row group, and overall.
+    Vd v(n1);
+    v.head(n) = phi;
+    v(n) = -1;
+    const double half = dof / 2;
+    const double sf2 = std::max(v.dot(gf * v), 0.0) / half;
+    const double st2 = std::max(v.dot(gt * v), 0.0) / half;
+    double s2 = (sf2 + st2) / 2;
     Md cov(n, n);
-    double s2 = 0;
-    if (in.kind == CovKind::TLS) {
-        // x in the scaled coordinates: D A T1 x ~ D y t_{n+1}.
-        Vd x(n);
-        for (int j = 0; j < n; ++j) x(j) = phi(j) * t(n) / t(j);
-        Eigen::SelfAdjointEigenSolver<Md> es(gs, Eigen::EigenvaluesOnly);
-        const double lmin = std::max(es.eigenvalues()(0), 0.0);
-        s2 = lmin / dof;  // per-entry noise variance of the scaled data
-        Md a0 = gs.topLeftCorner(n, n);
-        a0.diagonal().array() -= lmin;  // A0^T A0 of the noise-free data
-        Md inv;
-        if (!spd_inverse(a0, inv)) return LOADID_E_NOT_EXCITED;
-        const Md cx = s2 * (1.0 + x.squaredNorm()) * inv;
-        const Vd back = t.head(n) / t(n);
-        cov = back.asDiagonal() * cx * back.asDiagonal();
+    if (in.kind == CovKind::IV) {
+        Md m(n, n), cc(n, n);
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                m(i, j) = static_cast<double>(in.iv_m[j * n + i]);
+                cc(i, j) = static_cast<double>(in.iv_cc[j * n + i]);
+            }
+        Eigen::PartialPivLU<Md> lu(m);
+        const Md mi = lu.inverse();
+        if (!mi.allFinite()) return LOADID_E_NOT_EXCITED;
+        cov = s2 * mi * cc * mi.transpose();
     } else {
-        Vd v(n1);
-        v.head(n) = phi;
-        v(n) = -1;
-        s2 = std::max(v.dot(g * v), 0.0) / dof;  // weighted residual / dof
-        Md inv;
-        if (in.kind == CovKind::LS) {
-            if (!spd_inverse(g.topLeftCorner(n, n), inv)) return LOADID_E_NOT_EXCITED;
-            cov = s2 * inv;
-        } else {
-            Md m(n, n), cc(n, n);
-            for (int j = 0; j < n; ++j)
-                for (int i = 0; i < n; ++i) {
-                    m(i, j) = static_cast<double>(in.iv_m[j * n + i]);
-                    cc(i, j) = static_cast<double>(in.iv_cc[j * n + i]);
-                }
-            Eigen::PartialPivLU<Md> lu(m);
-            const Md mi = lu.inverse();
-            if (!mi.allFinite()) return LOADID_E_NOT_EXCITED;
-            cov = s2 * mi * cc * mi.transpose();
+        Md h = g.topLeftCorner(n, n);
+        if (in.kind == CovKind::TLS) {
+            // A0^T W A0 of the noise-free data: the noise's share, the
+            // smallest eigenvalue of the scaled Gram per unit column weight,
+            // comes off (Van Huffel & Vandewalle 1991, sec. 8.2).
+            Eigen::SelfAdjointEigenSolver<Md> es(gs, Eigen::EigenvaluesOnly);
+            const double lmin = std::max(es.eigenvalues()(0), 0.0);
+            h.diagonal().array() -= lmin * t.head(n).array().square().inverse();
+            // TLS's own scale: the orthogonal residual per entry of the
+            // weighted data, 1 when the row and column weights fit.
+            s2 = lmin / dof;
         }
+        Md hi;
+        if (!spd_inverse(h, hi)) return LOADID_E_NOT_EXCITED;
+        const Md meat = sf2 * gf.topLeftCorner(n, n) + st2 * gt.topLeftCorner(n, n);
+        cov = hi * meat * hi;
     }
     if (!cov.allFinite()) return LOADID_E_NOT_EXCITED;
     for (int i = 0; i < n; ++i) std[i] = static_cast<Real>(std::sqrt(std::max(cov(i, i), 0.0)));

@@ -8,10 +8,15 @@
 //        sec. 8.2): s^2 (1 + |x|^2) (A~^T A~ - sigma_{n+1}^2 I)^-1, mapped
 //        back through the column weights T.
 // W = D^2 are the row weights, so with noise levels that match the data the
-// scale s is 1. s is measured a posteriori (the weighted residual of the
+// scale s is 1 (for TLS the orthogonal residual per weighted entry, for the
+// others the vertical one). s is measured a posteriori (the weighted residual of the
 // method's own estimate over the degrees of freedom), so a noise model off
 // by a factor, or a vibration it does not know, widens the band instead of
-// leaving it wrong.
+// leaving it wrong. It is measured for the force rows and the torque rows
+// apart, and LS and TLS take the sandwich H^-1 (s_f^2 G_f + s_t^2 G_t) H^-1
+// (G_f, G_t the two row groups' A^T W A, H the whole, for TLS less the
+// noise's share): the errors of a - g, omega and alpha reach the two groups
+// differently, and one pooled s gave 83 % coverage on Izz and 98 % on m.
 #pragma once
 
 #include <cstdint>
@@ -27,6 +32,7 @@ struct CovInput {
     int n;                 // parameters (10 or 16)
     const Real *gram;      // (n+1) x (n+1) column-major, lower triangle: sum of
                            // (D [A y] T)^T (D [A y] T)
+    const Real *gram_torque; // the same over the torque rows only
     const Real *t;         // the n + 1 column weights T
     int64_t samples;       // k: 6 k rows
     const Real *phi;       // the method's estimate (n values)

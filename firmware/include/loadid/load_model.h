@@ -21,9 +21,10 @@
  *   - inertia about the COM made physically consistent: the second moment
  *     of the mass distribution Sigma_C = tr(I_C)/2 E - I_C must be positive
  *     semidefinite (the pseudo-inertia J >= 0 with m > 0; Wensing, Kim &
- *     Slotine 2017). Its negative eigenvalues are set to 0, which is the
- *     nearest such Sigma_C in the Frobenius norm (the principal axes are
- *     kept), and I_C = tr(Sigma_C) E - Sigma_C;
+ *     Slotine 2017). Its eigenvalues below a millionth of the largest are
+ *     raised to that, which is the nearest such Sigma_C in the Frobenius
+ *     norm (the principal axes are kept; Higham 1988), and
+ *     I_C = tr(Sigma_C) E - Sigma_C;
  *   - an unidentified inertia is replaced by the fallback: a uniform solid
  *     sphere of fallback_density at the COM, I_C = 2/5 m r^2 E,
  *     r = (3 m / (4 pi rho))^(1/3), which is consistent, small and never
