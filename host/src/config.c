@@ -138,6 +138,8 @@ void loadid_config_default(loadid_config_t *cfg) {
     static const double kOffset[6] = {2.0, -1.5, 3.0, 0.08, -0.05, 0.03};
     memcpy(cfg->sim_offset, kOffset, sizeof kOffset);
     cfg->sim_seed = 1;
+    cfg->sim_zero = 1; /* sim_drift, sim_accel_bias, sim_alpha_bias, sim_jitter_us: 0 */
+    cfg->sim_trajectory_scale = 1.0;
 }
 
 /* --- Checked readers: 1 read, 0 absent, -EINVAL (message in the doc) ------ */
@@ -642,6 +644,18 @@ static int read_simulation(loadid_yaml_node_t *root, loadid_config_t *c) {
     TRY(read_number(s, "still_s", &c->sim_still_s, NON_NEGATIVE));
     TRY(read_numbers(s, "load_phi", c->sim_load_phi, 10, 10, NULL, ANY));
     TRY(read_numbers(s, "offset", c->sim_offset, 6, 6, NULL, ANY));
+    TRY(read_bool_key(s, "zero", &c->sim_zero));
+    TRY(read_numbers(s, "drift", c->sim_drift, 6, 6, NULL, ANY));
+    TRY(read_numbers(s, "accel_bias", c->sim_accel_bias, 3, 3, NULL, ANY));
+    TRY(read_numbers(s, "alpha_bias", c->sim_alpha_bias, 3, 3, NULL, ANY));
+    TRY(read_int_range(s, "jitter_us", &c->sim_jitter_us, 0, 999));
+    loadid_yaml_node_t *scale = loadid_yaml_get(s, "trajectory_scale");
+    if (scale) {
+        TRY(read_number(s, "trajectory_scale", &c->sim_trajectory_scale, POSITIVE));
+        if (c->sim_trajectory_scale > 1)
+            return loadid_yaml_fail(scale, "a fraction of the trajectory's amplitude: must "
+                                           "be <= 1, got %g", c->sim_trajectory_scale);
+    }
     TRY(read_uint64(s, "seed", &c->sim_seed));
     /* The simulated noise: simulation.noise, else the noise.* numbers. */
     if (c->noise_given & LOADID_NOISE_GIVEN_FORCE) c->sim_noise_force = c->noise_force;

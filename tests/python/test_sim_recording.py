@@ -14,11 +14,19 @@ independent readers, and the condition-number tool (loadid-kappa):
 * Damaged recordings: what the decoder counts equals what truth.yaml says
   was done.
 * loadid-kappa: the structure of the paper's Table I.
+* Real-data-like settings (simulation.*), each against a computation here
+  from the recording's bytes: zero: false leaves START alone in lcm.log;
+  drift moves the decoded force/torque at rest by drift x elapsed time;
+  accel_bias/alpha_bias shift the decoded accelerometer at rest from -g in S
+  (Pinocchio) and 0; jitter_us moves only the time stamps (uniform, within
+  +-N, streams in order, contents unchanged) and 0 changes no byte;
+  trajectory_scale scales s_i(t) of the setpoints and so the peak velocity.
 """
 
 from __future__ import annotations
 
 import csv
+import json
 import math
 import pathlib
 import re
@@ -271,3 +279,265 @@ def test_kappa_refuses_a_missing_recording(tmp_path):
     r = subprocess.run([program("LOADID_KAPPA_EXE"), tmp_path / "nothing"], capture_output=True,
                        text=True, timeout=60)
     assert r.returncode != 0 and "cannot read" in r.stderr
+
+
+# ------------------------------------------------------------------ real-data-like settings
+# simulation.zero, drift, accel_bias, alpha_bias, jitter_us, trajectory_scale:
+# each checked against what the recording's own bytes say, computed here.
+G_BASE = np.array([0.0, 0.0, -9.81])
+RX60 = REPO_ROOT / "host" / "config" / "robots" / "rx60.urdf"
+
+
+def simulate_with(path, trajectory, config_text, *extra):
+    """A recording made with a configuration file holding config_text."""
+    path.mkdir(parents=True, exist_ok=True)
+    cfg = path / "config.yaml"
+    cfg.write_text(config_text)
+    return simulate(path / "rec", trajectory, "--config", cfg, *extra)
+
+
+def read_lcm(rec, lcmtypes):
+    """Every event of lcm.log in file order: (timestamp, channel, message)."""
+    lcm = pytest.importorskip("lcm")
+    events = []
+    for ev in lcm.EventLog(str(rec / "lcm.log"), "r"):
+        if ev.channel == "LOADID_JOINTS":
+            events.append((ev.timestamp, ev.channel, lcmtypes.joint_state_t.decode(ev.data)))
+        elif ev.channel == "LOADID_COMMAND":
+            events.append((ev.timestamp, ev.channel, lcmtypes.command_t.decode(ev.data)))
+        else:
+            pytest.fail(f"unexpected channel {ev.channel}")
+    return events
+
+
+def can_frame_times(rec):
+    times = []
+    for line in (rec / "can.log").read_text().splitlines():
+        m = CANDUMP.match(line)
+        assert m, line
+        times.append(int(m.group(1)) * 1_000_000 + int(m.group(2)))
+    return np.array(times)
+
+
+def traj_value(trajectory, key):
+    text = (trajectory / "traj.yaml").read_text()
+    return re.search(rf"^{key}: (.+)$", text, re.M).group(1)
+
+
+def window_means(rec, truth, seconds=0.2):
+    """Mean decoded JR3 values (12 channels) and mean time [s after the
+    start] over the recording's first and last `seconds` (both at rest at q_0)."""
+    samples, _, _ = decode_project(rec)
+    t = np.array(sorted(samples))
+    v = np.array([samples[k][2] for k in t])
+    begin, end = int(truth["times.begin"]), int(truth["times.end"])
+    first = t < begin + seconds * 1e6
+    last = t >= end - seconds * 1e6
+    assert first.sum() >= 190 and last.sum() >= 190
+    t = (t - begin) * 1e-6
+    return (v[first].mean(axis=0), t[first].mean()), (v[last].mean(axis=0), t[last].mean())
+
+
+def rx60_sensor(q, qd=None):
+    """Pinocchio from the URDF at the RX60's joint positions q (joint_1..6)
+    and velocities qd: g in the sensor frame S, and S's angular velocity in S."""
+    pin = pytest.importorskip("pinocchio")
+    model = pin.buildModelFromUrdf(str(RX60))
+    data = model.createData()
+    Q, V = pin.neutral(model), np.zeros(model.nv)
+    for i, name in enumerate(f"joint_{k}" for k in range(1, 7)):
+        joint = model.joints[model.getJointId(name)]
+        assert joint.nq == 1
+        Q[joint.idx_q] = q[i]
+        V[joint.idx_v] = 0.0 if qd is None else qd[i]
+    pin.forwardKinematics(model, data, Q, V)
+    pin.updateFramePlacements(model, data)
+    s_id = model.getFrameId("ft_sensor")
+    R_ob = data.oMf[model.getFrameId("base_link")].rotation
+    R_os = data.oMf[s_id].rotation
+    omega = np.asarray(pin.getFrameVelocity(model, data, s_id, pin.LOCAL).angular)
+    return (R_ob.T @ R_os).T @ G_BASE, omega
+
+
+def test_zero_false_no_still_phase(trajectory, tmp_path, lcmtypes):
+    rec = simulate_with(tmp_path, trajectory, "simulation:\n  zero: false\n  still_s: 0\n")
+    truth = read_truth(rec)
+    assert truth["simulation.zero"] == "false" and float(truth["simulation.still_s"]) == 0
+    assert int(truth["times.zero"]) == -1
+    begin = int(truth["times.begin"])
+    assert int(truth["times.trajectory"]) == begin
+    events = read_lcm(rec, lcmtypes)
+    commands = [(t, m) for t, ch, m in events if ch == "LOADID_COMMAND"]
+    # No ZERO: START alone, when the active part begins (fade_s after the
+    # trajectory's start, which is the recording's start).
+    assert [m.action for _, m in commands] == [lcmtypes.command_t.START]
+    fade_us = round(float(traj_value(trajectory, "fade_s")) * 1e6)
+    assert commands[0][0] == int(truth["times.start"]) == begin + fade_us
+    assert int(truth["counts.commands"]) == 1
+    # The trajectory starts at once: setpoints are loadid-traj's from the first one on.
+    sp = np.loadtxt(trajectory / "setpoints.csv", delimiter=",", skiprows=1)
+    joints = [(t, m) for t, ch, m in events if ch == "LOADID_JOINTS"]
+    for t, m in joints[:len(sp)]:
+        np.testing.assert_allclose(m.setpoint, sp[(t - begin) // 1000, 1:7], rtol=0, atol=1e-9)
+    samples, stats, _ = decode_project(rec)
+    assert len(samples) == stats["samples_ok"] == len(joints) == int(truth["counts.samples"])
+
+
+def test_drift_moves_the_offset_linearly(trajectory, tmp_path):
+    drift = np.array([0.05, -0.04, 0.03, 0.004, -0.003, 0.002])  # N/s, N m/s
+    quiet = "simulation:\n  noise:\n    force: 0\n    torque: 0\n"
+    rec = simulate_with(tmp_path / "drift", trajectory,
+                        quiet + f"  drift: [{', '.join(map(str, drift))}]\n")
+    still = simulate_with(tmp_path / "still", trajectory, quiet)
+    truth = read_truth(rec)
+    np.testing.assert_array_equal(json.loads(truth["simulation.drift"]), drift)
+    (v0, t0), (v1, t1) = window_means(rec, truth)
+    elapsed = t1 - t0
+    assert elapsed > 2.5, elapsed
+    change = (v1 - v0)[:6]
+    tol = one_count()[:6]
+    # Without drift the load reads the same at the start and in the tail.
+    (s0, _), (s1, _) = window_means(still, read_truth(still))
+    assert np.all(np.abs((s1 - s0)[:6]) <= tol), (s1 - s0)[:6] / tol
+    err = (change - drift * elapsed) / tol
+    print(f"drift: elapsed {elapsed:.4f} s, change {change}, expected {drift * elapsed}, "
+          f"error {err} counts")
+    assert np.all(np.abs(err) <= 1.0), err
+    assert np.all(np.abs(drift * elapsed) >= 5 * tol)  # well above the tolerance
+
+
+def test_accelerometer_biases(trajectory, tmp_path, lcmtypes):
+    accel_bias, alpha_bias = np.array([0.3, -0.2, 0.15]), np.array([0.5, -0.4, 0.3])
+    rec = simulate_with(
+        tmp_path, trajectory,
+        "simulation:\n  vibration_linear: 0\n  vibration_angular: 0\n"
+        "  noise:\n    linear: 0\n    angular: 0\n"
+        f"  accel_bias: [{', '.join(map(str, accel_bias))}]\n"
+        f"  alpha_bias: [{', '.join(map(str, alpha_bias))}]\n")
+    truth = read_truth(rec)
+    np.testing.assert_array_equal(json.loads(truth["simulation.accel_bias"]), accel_bias)
+    np.testing.assert_array_equal(json.loads(truth["simulation.alpha_bias"]), alpha_bias)
+    (v0, _), (v1, _) = window_means(rec, truth)
+    # At rest a = 0, so the accelerometer's a - g is -g in S, at the
+    # encoders' positions of the first joint state.
+    first = next(m for _, ch, m in read_lcm(rec, lcmtypes) if ch == "LOADID_JOINTS")
+    spec = -rx60_sensor(np.array(first.position))[0]
+    tol = one_count()
+    for v in (v0, v1):
+        lin_err = (v[6:9] - (spec + accel_bias)) / tol[6:9]
+        ang_err = (v[9:12] - alpha_bias) / tol[9:12]
+        print(f"accel bias: linear {v[6:9]} vs {spec + accel_bias} ({lin_err} counts), "
+              f"angular {v[9:12]} ({ang_err} counts)")
+        assert np.all(np.abs(lin_err) <= 1.0) and np.all(np.abs(ang_err) <= 1.0)
+    # The biases are well above the tolerance: without them the test would fail.
+    assert np.all(np.abs(accel_bias) >= 20 * tol[6:9]) and np.all(np.abs(alpha_bias) >= 4 * tol[9:12])
+
+
+def test_jitter_moves_only_the_stamps(recording, trajectory, tmp_path, lcmtypes):
+    n = 200
+    rec = simulate_with(tmp_path, trajectory, f"simulation:\n  jitter_us: {n}\n")
+    truth, clean = read_truth(rec), read_truth(recording)
+    assert int(truth["simulation.jitter_us"]) == n
+    begin = int(truth["times.begin"])
+    # lcm.log: in time order; joint states strictly increasing, each within
+    # +-n of its 1 kHz tick; commands at their nominal times.
+    events = read_lcm(rec, lcmtypes)
+    stamps = np.array([t for t, _, _ in events])
+    assert np.all(np.diff(stamps) >= 0)
+    joints = [(t, m) for t, ch, m in events if ch == "LOADID_JOINTS"]
+    commands = [(t, m.action) for t, ch, m in events if ch == "LOADID_COMMAND"]
+    assert commands == [(int(clean["times.zero"]), lcmtypes.command_t.ZERO),
+                        (int(clean["times.start"]), lcmtypes.command_t.START)]
+    tj = np.array([t for t, _ in joints])
+    assert all(m.utime == t for t, m in joints)
+    dev_j = tj - (begin + 1000 * np.arange(len(tj)))
+    d = np.diff(tj)
+    assert np.all(d > 0)
+    assert np.all(np.abs(dev_j) <= n) and np.all(np.abs(d - 1000) <= 2 * n)
+    # Uniform on [-n, n]: spread over the whole range, std (2n+1)/sqrt(12).
+    std = math.sqrt(((2 * n + 1) ** 2 - 1) / 12)
+    assert dev_j.max() >= 0.95 * n and dev_j.min() <= -0.95 * n
+    assert (d - 1000).max() >= 1.5 * n and (d - 1000).min() <= -1.5 * n
+    assert abs(dev_j.mean()) <= 10 and abs(dev_j.std() / std - 1) <= 0.08, (dev_j.mean(), dev_j.std())
+    # The joint messages' contents are those of the recording without jitter.
+    clean_joints = [m for _, ch, m in read_lcm(recording, lcmtypes) if ch == "LOADID_JOINTS"]
+    assert len(clean_joints) == len(joints)
+    for (_, m), c in zip(joints, clean_joints):
+        assert list(m.position) == list(c.position) and list(m.setpoint) == list(c.setpoint)
+    # can.log: frames strictly increasing in time; each sample within +-n
+    # of its nominal time (370 us after its tick), decoded to the values the
+    # clean recording's sample of the same tick carries.
+    assert np.all(np.diff(can_frame_times(rec)) > 0)
+    samples, stats, bad = decode_project(rec)
+    assert bad == 0 and stats["sequence_gaps"] == 0 and stats["samples_incomplete"] == 0
+    clean_samples, _, _ = decode_project(recording)
+    tc, tc_clean = sorted(samples), sorted(clean_samples)
+    assert len(tc) == len(tc_clean)
+    dev_c = np.array(tc) - np.array(tc_clean)
+    assert np.all(np.abs(dev_c) <= n)
+    assert dev_c.max() >= 0.95 * n and dev_c.min() <= -0.95 * n
+    assert abs(dev_c.std() / std - 1) <= 0.08
+    dc = np.diff(tc)
+    assert np.all(dc > 0) and np.all(np.abs(dc - 1000) <= 2 * n)
+    for a, b in zip(tc, tc_clean):
+        assert samples[a][1] == clean_samples[b][1]
+        np.testing.assert_array_equal(samples[a][2], clean_samples[b][2])
+    # Independent streams: joint and CAN jitter uncorrelated.
+    r = np.corrcoef(dev_j, dev_c)[0, 1]
+    assert abs(r) < 0.1, r
+    # The physics at the nominal times: values.csv differs in t_us only.
+    rows = (rec / "values.csv").read_text().splitlines()
+    clean_rows = (recording / "values.csv").read_text().splitlines()
+    assert [r.split(",", 1)[1] for r in rows] == [r.split(",", 1)[1] for r in clean_rows]
+    clipped = int(truth["simulation.jitter_clipped"])
+    print(f"jitter {n} us: joint dev mean {dev_j.mean():.2f} std {dev_j.std():.1f} "
+          f"(uniform {std:.1f}), CAN dev std {dev_c.std():.1f}, corr {r:.3f}, "
+          f"clipped {clipped}, joint diffs {d.min()}..{d.max()} us")
+    # The recording reader (drivers/recording.h) takes it: loadid-kappa runs.
+    out = run_tool([program("LOADID_KAPPA_EXE"), rec]).stdout.splitlines()
+    assert out[1].split()[1:3] == ["o1", "1500"], out
+
+
+def test_jitter_zero_is_byte_identical(recording, trajectory, tmp_path):
+    rec = simulate_with(tmp_path, trajectory, "simulation:\n  jitter_us: 0\n")
+    for name in ["can.log", "lcm.log", "truth.yaml", "values.csv"]:
+        assert (rec / name).read_bytes() == (recording / name).read_bytes(), name
+
+
+def test_trajectory_scale_scales_the_motion(recording, trajectory, tmp_path, lcmtypes):
+    s = 0.05
+    rec = simulate_with(tmp_path, trajectory, f"simulation:\n  trajectory_scale: {s}\n")
+    truth = read_truth(rec)
+    assert float(truth["simulation.trajectory_scale"]) == s
+
+    def setpoints(r):
+        return np.array([m.setpoint for _, ch, m in read_lcm(r, lcmtypes)
+                         if ch == "LOADID_JOINTS"])
+
+    full, slow = setpoints(recording), setpoints(rec)
+    q0 = np.array(json.loads(traj_value(trajectory, "q0")))
+    assert full.shape == slow.shape
+    # s_i(t) = q(t) - q_0, scaled by s at every instant.
+    np.testing.assert_allclose(slow - q0, s * (full - q0), rtol=0, atol=1e-12)
+    v_full = np.abs(np.diff(full, axis=0)).max(axis=0) / 1e-3
+    v_slow = np.abs(np.diff(slow, axis=0)).max(axis=0) / 1e-3
+    np.testing.assert_allclose(v_slow / v_full, s, rtol=1e-6)
+    a_slow = np.abs(np.diff(slow, 2, axis=0)).max() / 1e-6
+    print(f"trajectory_scale {s}: peak joint velocity {v_full.max():.3f} -> {v_slow.max():.4f} "
+          f"rad/s, peak joint acceleration {a_slow:.3f} rad/s^2")
+    # The real-data-like target for the sensor: |omega| <= 0.4 rad/s (from
+    # the setpoints by Pinocchio) and |alpha| <= 2 rad/s^2, read off the JR3
+    # angular channel (noise and vibration off).
+    qd = np.gradient(slow, 1e-3, axis=0)
+    peak_omega = max(float(np.linalg.norm(rx60_sensor(q, v)[1]))
+                     for q, v in zip(slow[::10], qd[::10]))
+    print(f"trajectory_scale {s}: peak |omega| of S {peak_omega:.3f} rad/s")
+    assert peak_omega <= 0.4
+    quiet = simulate_with(tmp_path / "quiet", trajectory,
+                          f"simulation:\n  trajectory_scale: {s}\n  vibration_angular: 0\n"
+                          "  noise:\n    angular: 0\n")
+    samples, _, _ = decode_project(quiet)
+    alpha = np.array([v[2][9:12] for v in samples.values()])
+    peak_alpha = float(np.linalg.norm(alpha, axis=1).max())
+    print(f"trajectory_scale {s}: peak |alpha| of S {peak_alpha:.3f} rad/s^2")
+    assert peak_alpha <= 2.0

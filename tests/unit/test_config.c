@@ -674,6 +674,77 @@ static void wrong_lengths_and_values(void **state) {
                  "2: robot.base_link: longer than 63 characters");
 }
 
+/* simulation.zero, drift, accel_bias, alpha_bias, jitter_us, trajectory_scale:
+ * the real-hardware-like settings of loadid-sim (loadid/config.h). */
+static void assert_sim_realism_defaults(const loadid_config_t *c) {
+    assert_int_equal(c->sim_zero, 1);
+    assert_doubles(c->sim_drift, (const double[]){0, 0, 0, 0, 0, 0}, 6, "sim_drift");
+    assert_doubles(c->sim_accel_bias, (const double[]){0, 0, 0}, 3, "sim_accel_bias");
+    assert_doubles(c->sim_alpha_bias, (const double[]){0, 0, 0}, 3, "sim_alpha_bias");
+    assert_int_equal(c->sim_jitter_us, 0);
+    ASSERT_EQ_D(c->sim_trajectory_scale, 1.0);
+}
+
+static void simulation_realism_keys(void **state) {
+    (void)state;
+    loadid_config_t c;
+    warnings_t w;
+    memset(&c, 0x5a, sizeof c);
+    loadid_config_default(&c);
+    assert_sim_realism_defaults(&c);
+    memset(&c, 0x5a, sizeof c);
+    load_ok(EXAMPLE, &c, &w); /* the shipped example gives every key its default */
+    assert_int_equal(w.count, 0);
+    assert_sim_realism_defaults(&c);
+
+    load_ok(write_file("realism.yaml",
+                       "simulation:\n"
+                       "  still_s: 0\n"
+                       "  zero: false\n"
+                       "  drift: [0.01, -0.02, 0.03, 1e-3, -2e-3, 3e-3]\n"
+                       "  accel_bias: [0.1, -0.2, 0.3]\n"
+                       "  alpha_bias: [-1, 2, -3]\n"
+                       "  jitter_us: 250\n"
+                       "  trajectory_scale: 0.05\n"),
+            &c, &w);
+    assert_int_equal(w.count, 0);
+    ASSERT_EQ_D(c.sim_still_s, 0);
+    assert_int_equal(c.sim_zero, 0);
+    assert_doubles(c.sim_drift, (const double[]){0.01, -0.02, 0.03, 1e-3, -2e-3, 3e-3}, 6, "drift");
+    assert_doubles(c.sim_accel_bias, (const double[]){0.1, -0.2, 0.3}, 3, "accel_bias");
+    assert_doubles(c.sim_alpha_bias, (const double[]){-1, 2, -3}, 3, "alpha_bias");
+    assert_int_equal(c.sim_jitter_us, 250);
+    ASSERT_EQ_D(c.sim_trajectory_scale, 0.05);
+    load_ok(write_file("realism_edges.yaml",
+                       "simulation:\n  zero: true\n  jitter_us: 999\n  trajectory_scale: 1\n"),
+            &c, &w);
+    assert_int_equal(c.sim_zero, 1);
+    assert_int_equal(c.sim_jitter_us, 999);
+    ASSERT_EQ_D(c.sim_trajectory_scale, 1.0);
+
+    expect_error("simulation:\n  zero: 0\n", "2: simulation.zero: expected true or false, got '0'");
+    expect_error("simulation:\n  zero: [true]\n", "2: simulation.zero: expected true or false");
+    expect_error("simulation:\n  drift: [0, 0, 0]\n", "2: simulation.drift: expected 6 numbers, got 3");
+    expect_error("simulation:\n  drift: [0, 0, 0, 0, x, 0]\n",
+                 "2: simulation.drift[4]: expected a number, got 'x'");
+    expect_error("simulation:\n  accel_bias: [0, 0]\n",
+                 "2: simulation.accel_bias: expected 3 numbers, got 2");
+    expect_error("simulation:\n  alpha_bias: [0, 0, .inf]\n",
+                 "2: simulation.alpha_bias[2]: expected a finite number, got '.inf'");
+    expect_error("simulation:\n  alpha_bias: 1\n",
+                 "2: simulation.alpha_bias: expected a sequence of 3 numbers, got '1'");
+    expect_error("simulation:\n  jitter_us: -1\n", "2: simulation.jitter_us: must be 0..999, got -1");
+    expect_error("simulation:\n  jitter_us: 1000\n",
+                 "2: simulation.jitter_us: must be 0..999, got 1000");
+    expect_error("simulation:\n  jitter_us: 2.5\n",
+                 "2: simulation.jitter_us: expected an integer, got '2.5'");
+    expect_error("simulation:\n  trajectory_scale: 0\n",
+                 "2: simulation.trajectory_scale: must be > 0, got 0");
+    expect_error("simulation:\n  seed: 3\n  trajectory_scale: 1.5\n",
+                 "3: simulation.trajectory_scale: a fraction of the trajectory's amplitude: must be "
+                 "<= 1, got 1.5");
+}
+
 static void bad_names(void **state) {
     (void)state;
     expect_error("estimation:\n  methods: [RTLS, FOO]\n",
@@ -976,6 +1047,7 @@ int main(void) {
         cmocka_unit_test(duplicate_keys),
         cmocka_unit_test(unknown_keys_are_warnings),
         cmocka_unit_test(unreadable_files),
+        cmocka_unit_test(simulation_realism_keys),
         cmocka_unit_test(yaml_tree_nodes_and_lines),
         cmocka_unit_test(yaml_tree_scalars),
         cmocka_unit_test(yaml_tree_refuses),

@@ -11,10 +11,19 @@
  *   - the JR3 accelerometer's a - g and alpha of the real motion, plus white
  *     noise and a structural vibration;
  *   - encoder quantisation, JR3 counts with saturation and status bytes.
- * Timeline: rest at q_0 for simulation.still_s (ZERO at 0.05 s), the
- * trajectory (START when its active part begins), 0.3 s of rest. CAN
- * samples (base+0..3) at 1 kHz, 370 us after each 1 kHz joint state;
- * base+4 full-scale frames of all four groups once a second.
+ * Timeline: rest at q_0 for simulation.still_s (ZERO at 0.05 s unless
+ * simulation.zero is false), the trajectory (START when its active part
+ * begins), 0.3 s of rest. CAN samples (base+0..3) at 1 kHz, 370 us after
+ * each 1 kHz joint state; base+4 full-scale frames of all four groups once
+ * a second.
+ * Imitating real hardware data (simulation.*, all off by default): the
+ * trajectory's s_i(t) about q_0 scaled by trajectory_scale (slower, gentler
+ * motion); the F/T offset drifting linearly from the recording's start
+ * (drift); constant accelerometer biases (accel_bias on a - g, alpha_bias
+ * on alpha); time stamps of CAN samples and joint states jittered by
+ * uniform integers in [-jitter_us, jitter_us] from a random stream of their
+ * own (the physics stays at the nominal times; a stamp that would not
+ * follow its stream's previous one is clipped to 1 us after it).
  * Output: DIR/can.log, DIR/lcm.log, DIR/truth.yaml; byte-identical for the
  * same inputs and seed.
  */
@@ -53,7 +62,10 @@ static void usage(FILE *out) {
             "robot (robot.*) following the trajectory of loadid-traj with the load\n"
             "simulation.load_phi (default the paper's o1) and the distal part distal.phi,\n"
             "offsets simulation.offset, noise noise.*, servo, backlash, vibration and\n"
-            "encoder of simulation.*, JR3 full scales jr3.*, CAN can.*.\n"
+            "encoder of simulation.*, JR3 full scales jr3.*, CAN can.*; like real\n"
+            "hardware data with simulation.zero false (no ZERO command), drift (of\n"
+            "the offset), accel_bias, alpha_bias, jitter_us (of the time stamps) and\n"
+            "trajectory_scale < 1 (slower motion).\n"
             "--damage writes a deliberately damaged recording; KIND is one of\n"
             "  drop-frames=P skip-samples=P bit-errors=P saturate=P fault=P bad-frames=P\n"
             "  nan-joints=P stall-joints=T0:T1 (seconds); may be repeated.\n"
@@ -168,7 +180,12 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s: %s: %s\n", prog, out_dir, err);
         return 1;
     }
-    fprintf(stderr, "%s: %s: %lld samples, %.2f s, ZERO at %.2f s, START at %.2f s\n", prog,
-            out_dir, (long long)sum.samples, sum.duration_s, sum.zero_s, sum.start_s);
+    char zero[32] = "no ZERO";
+    if (sum.zero_s >= 0) snprintf(zero, sizeof zero, "ZERO at %.2f s", sum.zero_s);
+    fprintf(stderr, "%s: %s: %lld samples, %.2f s, %s, START at %.2f s\n", prog, out_dir,
+            (long long)sum.samples, sum.duration_s, zero, sum.start_s);
+    if (sum.jitter_clipped > 0)
+        fprintf(stderr, "%s: %s: %lld jittered time stamps clipped to keep their stream in "
+                        "order\n", prog, out_dir, (long long)sum.jitter_clipped);
     return 0;
 }

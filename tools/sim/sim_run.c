@@ -40,8 +40,11 @@ typedef struct {
     loadid_recording_writer_t *rec;
     FILE *values;                 /* --values: what each sample encodes, in SI */
     double vib_phase[2][3];
+    loadid_rng_t jitter_rng;      /* simulation.jitter_us: a stream of its own */
+    int64_t last_joint_us;        /* stamp of the last joint state written */
+    int64_t last_can_us;          /* time of the last CAN frame written */
     /* counts */
-    int64_t samples, saturated_samples;
+    int64_t samples, saturated_samples, jitter_clipped;
 } sim_t;
 
 static double quantise(const sim_t *s, int joint, double q) {
@@ -77,10 +80,13 @@ static void measure(sim_t *s, double t, const loadid_motion_t *m, double value[4
     double load[6], distal[6];
     loadid_synth_wrench(s->cfg.sim_load_phi, m, load);
     loadid_synth_wrench(s->cfg.distal_phi, m, distal);
+    /* The offset, drifting linearly from the recording's start (t = 0). */
+    double offset[6];
+    for (int i = 0; i < 6; ++i) offset[i] = s->cfg.sim_offset[i] + s->cfg.sim_drift[i] * t;
     for (int i = 0; i < 3; ++i) {
-        value[LOADID_JR3_FORCE][i] = load[i] + distal[i] + s->cfg.sim_offset[i] +
+        value[LOADID_JR3_FORCE][i] = load[i] + distal[i] + offset[i] +
                                      s->cfg.sim_noise_force * loadid_rng_normal(&s->rng);
-        value[LOADID_JR3_MOMENT][i] = load[3 + i] + distal[3 + i] + s->cfg.sim_offset[3 + i] +
+        value[LOADID_JR3_MOMENT][i] = load[3 + i] + distal[3 + i] + offset[3 + i] +
                                       s->cfg.sim_noise_torque * loadid_rng_normal(&s->rng);
     }
     const double wt = kTwoPi * s->cfg.sim_vibration_hz * t;
@@ -91,6 +97,12 @@ static void measure(sim_t *s, double t, const loadid_motion_t *m, double value[4
                                        s->cfg.sim_noise_angular * loadid_rng_normal(&s->rng) +
                                        s->cfg.sim_vibration_angular * sin(wt + s->vib_phase[1][i]);
     }
+    /* Accelerometer biases (added only when set: a zero bias leaves the
+     * values bit for bit as without it). */
+    for (int i = 0; i < 3; ++i) {
+        if (s->cfg.sim_accel_bias[i] != 0) value[LOADID_JR3_LINEAR][i] += s->cfg.sim_accel_bias[i];
+        if (s->cfg.sim_alpha_bias[i] != 0) value[LOADID_JR3_ANGULAR][i] += s->cfg.sim_alpha_bias[i];
+    }
 }
 
 static int write_can(sim_t *s, loadid_can_frame_t *f) {
@@ -98,10 +110,12 @@ static int write_can(sim_t *s, loadid_can_frame_t *f) {
         unsigned bit = loadid_damage_pick(&s->damage, 64);
         f->data[bit / 8] ^= (uint8_t)(1u << (bit % 8));
     }
+    s->last_can_us = f->t_us;
     return loadid_recording_can(s->rec, f);
 }
 
-/* The four frames of CAN sample k at utime t, with any damage asked for. */
+/* The four frames of CAN sample k stamped utime t (its motion at simulation
+ * time sim_t_s), with any damage asked for. */
 static int can_sample(sim_t *s, int64_t k, int64_t t, double sim_t_s) {
     loadid_servo_state_t st;
     loadid_motion_t m;
@@ -136,6 +150,7 @@ static int can_sample(sim_t *s, int64_t k, int64_t t, double sim_t_s) {
             bad.dlc = 6;
         else
             bad.id = s->jr3.base_id + 7;
+        s->last_can_us = bad.t_us;
         if ((rc = loadid_recording_can(s->rec, &bad)) != 0) return rc;
     }
     return 0;
@@ -152,6 +167,7 @@ static int full_scale_frames(sim_t *s, int64_t t) {
     return 0;
 }
 
+/* The joint state of simulation time sim_t_s, stamped utime t. */
 static int joint_state(sim_t *s, int64_t t, double sim_t_s) {
     loadid_servo_state_t st;
     loadid_servo_advance(&s->servo, sim_t_s, &st);
@@ -163,7 +179,23 @@ static int joint_state(sim_t *s, int64_t t, double sim_t_s) {
     double pos[LOADID_MAX_JOINTS];
     for (int i = 0; i < s->chain.num_joints; ++i) pos[i] = quantise(s, i, st.motor[i]);
     if (loadid_damage_now(&s->damage, LOADID_DAMAGE_NAN_JOINTS)) pos[0] = NAN;
+    s->last_joint_us = t;
     return loadid_recording_joints(s->rec, t, s->chain.num_joints, pos, st.setpoint);
+}
+
+/* The stamp of an event due at utime t: t plus uniform integer jitter in
+ * [-N, N] us, clipped to 1 us after last (its stream's previous stamp).
+ * Without jitter, t untouched and nothing drawn. */
+static int64_t jittered(sim_t *s, int64_t t, int64_t last) {
+    const int n = s->cfg.sim_jitter_us;
+    if (n <= 0) return t;
+    int64_t j = (int64_t)floor(loadid_rng_uniform(&s->jitter_rng) * (2 * n + 1)) - n;
+    if (j > n) j = n; /* uniform() < 1, but stay safe */
+    if (t + j <= last) {
+        s->jitter_clipped++;
+        return last + 1;
+    }
+    return t + j;
 }
 
 static void list(FILE *f, const double *v, int n) {
@@ -231,6 +263,16 @@ static int write_truth(const sim_t *s, const char *dir, const char *traj_path,
                 (long long)s->damage.count[k]);
     fprintf(f, "  stall-joints: {from_s: %.17g, to_s: %.17g, count: %lld}\n", s->damage.stall_from,
             s->damage.stall_to, (long long)s->damage.stalled_joint_msgs);
+    fprintf(f, "simulation:            # imitating real hardware data (loadid.yaml simulation.*)\n"
+               "  zero: %s\n  still_s: %.17g\n  drift: ",
+            c->sim_zero ? "true" : "false", c->sim_still_s);
+    list(f, c->sim_drift, 6);
+    fprintf(f, "\n  accel_bias: ");
+    list(f, c->sim_accel_bias, 3);
+    fprintf(f, "\n  alpha_bias: ");
+    list(f, c->sim_alpha_bias, 3);
+    fprintf(f, "\n  jitter_us: %d\n  jitter_clipped: %lld\n  trajectory_scale: %.17g\n",
+            c->sim_jitter_us, (long long)s->jitter_clipped, c->sim_trajectory_scale);
     int e = ferror(f) ? EIO : 0;
     if (fclose(f) != 0 && !e) e = errno;
     return -e;
@@ -254,7 +296,16 @@ int loadid_sim_run(const loadid_sim_options_t *o, loadid_sim_summary_t *sum, cha
     s->chain = *o->chain;
     s->traj = *o->traj;
     s->kappa_set = o->kappa_set;
-    if (s->cfg.sim_still_s < ZERO_AT_S + s->cfg.zeroing_window_s)
+    /* simulation.trajectory_scale: s_i(t) of eqs. (10)-(11) is linear in
+     * the coefficients, so scaling them scales it (q_0 stays). */
+    const double scale = s->cfg.sim_trajectory_scale;
+    if (scale != 1.0)
+        for (int i = 0; i < s->traj.num_joints; ++i)
+            for (int k = 0; k < LOADID_TRAJ_MAX_HARMONICS; ++k) {
+                s->traj.rho[i][k] *= scale;
+                s->traj.delta[i][k] *= scale;
+            }
+    if (s->cfg.sim_zero && s->cfg.sim_still_s < ZERO_AT_S + s->cfg.zeroing_window_s)
         fprintf(stderr, "loadid-sim: warning: simulation.still_s %.3g s leaves less than "
                         "zeroing.window_s after ZERO at %.2f s\n", s->cfg.sim_still_s, ZERO_AT_S);
     int rc = loadid_kin_create(&s->chain, s->cfg.robot_gravity, &s->kin);
@@ -264,6 +315,8 @@ int loadid_sim_run(const loadid_sim_options_t *o, loadid_sim_summary_t *sum, cha
         return fail(s, err, errlen, -EINVAL, "invalid JR3 configuration (can.base_id, jr3.*)");
     loadid_rng_seed(&s->rng, o->seed);
     loadid_damage_init(&s->damage, o->seed);
+    loadid_rng_seed(&s->jitter_rng, o->seed ^ 0xD1B54A32D192ED03ull); /* apart from both */
+    s->last_joint_us = s->last_can_us = INT64_MIN;
     memcpy(s->damage.p, o->damage.p, sizeof s->damage.p);
     s->damage.stall_from = o->damage.stall_from, s->damage.stall_to = o->damage.stall_to;
     for (int a = 0; a < 2; ++a)
@@ -296,15 +349,23 @@ int loadid_sim_run(const loadid_sim_options_t *o, loadid_sim_summary_t *sum, cha
     const long ticks = lround(total * 1000);
     for (long k = 0; k < ticks && rc == 0; ++k) {
         const int64_t tj = t0 + (int64_t)k * 1000;
-        if (tj == zero_us) rc = loadid_recording_command(s->rec, tj, 1, o->load_name);
+        /* The joint state's stamp, jittered; lcm.log stays in time order
+         * when it falls before this tick's commands (at tj). */
+        const int64_t sj = jittered(s, tj, s->last_joint_us);
+        const int early = sj < tj;
+        if (early) rc = joint_state(s, sj, k * 1e-3);
+        if (rc == 0 && s->cfg.sim_zero && tj == zero_us)
+            rc = loadid_recording_command(s->rec, tj, 1, o->load_name);
         if (rc == 0 && tj == start_us) rc = loadid_recording_command(s->rec, tj, 2, o->load_name);
-        if (rc == 0) rc = joint_state(s, tj, k * 1e-3);
+        if (rc == 0 && !early) rc = joint_state(s, sj, k * 1e-3);
         const int64_t tc = tj + CAN_PHASE_US;
-        if (rc == 0) rc = can_sample(s, k, tc, (tc - t0) * 1e-6);
-        if (rc == 0 && k % 1000 == 500) rc = full_scale_frames(s, tc + 4 * FRAME_GAP_US);
+        const int64_t sc = jittered(s, tc, s->last_can_us); /* the sample's stamp */
+        if (rc == 0) rc = can_sample(s, k, sc, (tc - t0) * 1e-6);
+        if (rc == 0 && k % 1000 == 500) rc = full_scale_frames(s, sc + 4 * FRAME_GAP_US);
     }
     if (rc == 0)
-        rc = write_truth(s, o->out_dir, o->traj_path, o->load_name, o->seed, t0, zero_us, start_us,
+        rc = write_truth(s, o->out_dir, o->traj_path, o->load_name, o->seed, t0,
+                         s->cfg.sim_zero ? zero_us : -1, start_us,
                          t0 + (int64_t)llround(traj_start * 1e6),
                          start_us + (int64_t)llround(s->traj.active_s * 1e6), t0 + ticks * 1000);
     int crc = loadid_recording_close(s->rec);
@@ -314,7 +375,8 @@ int loadid_sim_run(const loadid_sim_options_t *o, loadid_sim_summary_t *sum, cha
     if (sum) {
         sum->samples = s->samples;
         sum->duration_s = total;
-        sum->zero_s = ZERO_AT_S;
+        sum->zero_s = s->cfg.sim_zero ? ZERO_AT_S : -1;
+        sum->jitter_clipped = s->jitter_clipped;
         sum->start_s = active_start;
     }
     loadid_kin_destroy(s->kin);

@@ -11,10 +11,19 @@
  *   - the JR3 accelerometer's a - g and alpha of the real motion, plus white
  *     noise and a structural vibration;
  *   - encoder quantisation, JR3 counts with saturation and status bytes.
- * Timeline: rest at q_0 for simulation.still_s (ZERO at 0.05 s), the
- * trajectory (START when its active part begins), 0.3 s of rest. CAN
- * samples (base+0..3) at 1 kHz, 370 us after each 1 kHz joint state;
- * base+4 full-scale frames of all four groups once a second.
+ * Timeline: rest at q_0 for simulation.still_s (ZERO at 0.05 s unless
+ * simulation.zero is false), the trajectory (START when its active part
+ * begins), 0.3 s of rest. CAN samples (base+0..3) at 1 kHz, 370 us after
+ * each 1 kHz joint state; base+4 full-scale frames of all four groups once
+ * a second.
+ * Imitating real hardware data (simulation.*, all off by default): the
+ * trajectory's s_i(t) about q_0 scaled by trajectory_scale (slower, gentler
+ * motion); the F/T offset drifting linearly from the recording's start
+ * (drift); constant accelerometer biases (accel_bias on a - g, alpha_bias
+ * on alpha); time stamps of CAN samples and joint states jittered by
+ * uniform integers in [-jitter_us, jitter_us] from a random stream of their
+ * own (the physics stays at the nominal times; a stamp that would not
+ * follow its stream's previous one is clipped to 1 us after it).
  * Output: DIR/can.log, DIR/lcm.log, DIR/truth.yaml; byte-identical for the
  * same inputs and seed.
  */
@@ -49,10 +58,13 @@ typedef struct {
 
 typedef struct {
     int64_t samples;                   /* CAN samples simulated */
-    double duration_s, zero_s, start_s; /* length; ZERO and START after the start */
+    double duration_s, zero_s, start_s; /* length; ZERO (-1: none, simulation.zero
+                                           false) and START after the start */
+    int64_t jitter_clipped;            /* jittered stamps clipped to keep order */
 } loadid_sim_summary_t;
 
-/* Simulates and writes out_dir/can.log, lcm.log, truth.yaml. Returns 0, or
+/* Simulates and writes out_dir/can.log, lcm.log, truth.yaml (its times.zero
+ * is -1 without a ZERO command). Returns 0, or
  * a negative code with a one-line reason in err. sum may be NULL. */
 int loadid_sim_run(const loadid_sim_options_t *o, loadid_sim_summary_t *sum, char *err,
                    size_t errlen);

@@ -204,6 +204,26 @@ typedef struct {
     double sim_load_phi[10];            /* default: the paper's o1 */
     double sim_offset[6];               /* F/T offset [N, N m], default
                                            [2 -1.5 3 0.08 -0.05 0.03] */
+    /* Imitating real hardware data (defaults: none of it): */
+    int sim_zero;                       /* zero: a ZERO command 0.05 s into the
+                                           still phase; false: none (START still
+                                           comes), default true */
+    double sim_drift[6];                /* drift: the F/T offset grows by this
+                                           times the time since the recording's
+                                           start [N/s, N m/s], default 0 */
+    double sim_accel_bias[3];           /* accel_bias: added to the JR3 linear
+                                           channel a - g [m/s^2], default 0 */
+    double sim_alpha_bias[3];           /* alpha_bias: added to the JR3 angular
+                                           channel alpha [rad/s^2], default 0 */
+    int sim_jitter_us;                  /* jitter_us: each CAN sample's and joint
+                                           state's time stamp moves by uniform
+                                           integer jitter in [-N, N] us (the
+                                           physics stays at the nominal time;
+                                           streams kept strictly increasing),
+                                           0..999, default 0 */
+    double sim_trajectory_scale;        /* trajectory_scale: the trajectory's
+                                           s_i(t) about q_0 (eqs. 10-11) times
+                                           this, (0, 1], default 1 */
     uint64_t sim_seed;                  /* default 1 */
     /* simulation.noise: the simulated sensor's noise [N, N m, m/s^2,
      * rad/s^2]; default the noise.* numbers given, else 0.1, 0.005, 0.5, 5 */
