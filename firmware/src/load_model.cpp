@@ -106,6 +106,9 @@ extern "C" int loadid_load_model(const loadid_real_t estimate[10], const loadid_
                      std::max(Is.cwiseAbs().maxCoeff(), Im.cwiseAbs().maxCoeff());
     for (int i = 4; i < LOADID_NPHI; ++i)
         if (std::abs(out->phi[i] - estimate[i]) > tol) out->projected = 1;
+    // Not projected: the estimate itself, to the bit.
+    if (!out->projected)
+        for (int i = 4; i < LOADID_NPHI; ++i) out->phi[i] = estimate[i];
     loadid_phi_to_physical(out->phi, &out->physical);
     return 0;
 }

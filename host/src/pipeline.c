@@ -15,9 +15,6 @@
 #define MIN_ZEROING_SAMPLES 10
 #define PENDING_MAX 64 /* samples waiting for joint data: 64 ms at 1 kHz */
 #define NOISE_MAX_GAP_US 20000 /* third differences need consecutive samples */
-/* A run is incomplete when more of its window's samples than this were
- * refused for want of joint data. */
-#define MAX_STALE_SHARE 0.05
 
 struct loadid_pipeline {
     loadid_config_t cfg;
@@ -268,10 +265,12 @@ static void check_complete(loadid_pipeline_t *p, int64_t utime, int by_stop) {
         snprintf(buf, sizeof buf, "the input ended %.3f s before the estimation window did",
                  (double)(p->est_end_us - utime) / 1e6);
         why = buf;
-    } else if ((double)stale > MAX_STALE_SHARE * (double)(stale + p->samples_used)) {
+    } else if ((double)stale > p->cfg.max_missing_share * (double)(stale + p->samples_used)) {
         snprintf(buf, sizeof buf,
-                 "joint data missing for %lld of the window's %lld samples (more than %.0f %%)",
-                 (long long)stale, (long long)(stale + p->samples_used), MAX_STALE_SHARE * 100);
+                 "joint data missing for %lld of the window's %lld samples (more than %.3g %%, "
+                 "estimation.max_missing_share)",
+                 (long long)stale, (long long)(stale + p->samples_used),
+                 p->cfg.max_missing_share * 100);
         why = buf;
     }
     p->complete = why[0] == 0;

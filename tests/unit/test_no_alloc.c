@@ -173,8 +173,9 @@ static void workload_free(workload_t *w) {
 /* Every sample an update; an estimate after most, 1 to 5 samples apart
  * (the daemon publishes every sample or every publish_every-th: RTLS's
  * blocks of 1, 2, 3 and 4 samples, rtls.hpp); a NaN sample in the middle
- * (the rejection path); a reset at the end. Returns the number of
- * unexpected return codes. */
+ * (the rejection path); at the end what the daemon does at DONE (the
+ * uncertainty and the load model) and at START (new weights), then a
+ * reset. Returns the number of unexpected return codes. */
 static int workload_run(workload_t *w) {
     int bad = 0;
     for (int i = 0; i < NEST; ++i) {
@@ -195,6 +196,19 @@ static int workload_run(workload_t *w) {
                 if (loadid_est_update(w->est[i], dataset_A(d, k), dataset_C(d, k), y) != LOADID_E_NONFINITE) ++bad;
             }
         }
+        loadid_real_t phi[16], std[16], scale;
+        const int rc_e = loadid_est_estimate(w->est[i], phi, NULL);
+        const int rc_u = loadid_est_uncertainty(w->est[i], phi, std, &scale);
+        if ((rc_e != 0 && rc_e != LOADID_E_NOT_EXCITED) || rc_u != 0) ++bad;
+        loadid_model_config_t mc;
+        loadid_model_config_default(&mc);
+        loadid_load_model_t model;
+        if (loadid_load_model(phi, std, &mc, &model) != 0) ++bad;
+        const loadid_est_config_t *c = loadid_est_config(w->est[i]);
+        loadid_real_t rows[6], cols[LOADID_MAX_PARAMS + 1];
+        memcpy(rows, c->row_sigma, sizeof rows);
+        memcpy(cols, c->col_weight, sizeof cols);
+        if (loadid_est_set_weights(w->est[i], rows, cols) != 0) ++bad;
         if (loadid_est_reset(w->est[i]) != 0) ++bad;
     }
     return bad + signals_run(w);

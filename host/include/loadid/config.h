@@ -79,6 +79,10 @@ typedef struct {
                                            estimate_t after every n-th sample while
                                            estimating (1, default: every sample);
                                            the final one always; 1..1000000 */
+    double max_missing_share;           /* estimation.max_missing_share: (loadid) a
+                                           run whose window lost more than this
+                                           share of its samples for want of joint
+                                           data is incomplete; [0, 1], default 0.02 */
 
     /* zeroing: */
     double zeroing_window_s;            /* default 0.2 */
