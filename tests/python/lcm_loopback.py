@@ -1,6 +1,6 @@
 """What the live sessions (live_session.py, modbus_session.py) share: LCM
 multicast on the loopback of a private network namespace, a recording's
-two streams, and the daemon's three output channels collected (not
+two streams, and the daemon's four output channels collected (not
 collected by pytest)."""
 
 from __future__ import annotations
@@ -47,17 +47,18 @@ def open_session(pydir, rec):
 
 
 class Outputs:
-    """estimate_t, status_t and wrench_t from the daemon, decoded with
+    """estimate_t, status_t, wrench_t and load_model_t from the daemon, decoded with
     lcm-gen's Python types; reencoded_differ counts the messages whose
     re-encoding differs from the bytes received."""
 
     def __init__(self, lc, types):
         self.lc = lc
-        self.got = {"estimate": [], "status": [], "wrench": []}
+        self.got = {"estimate": [], "status": [], "wrench": [], "model": []}
         self.reencoded_differ = 0
         for kind, channel, cls in (("estimate", "LOADID_ESTIMATE", types.estimate_t),
                                    ("status", "LOADID_STATUS", types.status_t),
-                                   ("wrench", "LOADID_WRENCH", types.wrench_t)):
+                                   ("wrench", "LOADID_WRENCH", types.wrench_t),
+                                   ("model", "LOADID_MODEL", types.load_model_t)):
             lc.subscribe(channel, self._keeper(kind, cls))
 
     def _keeper(self, kind, cls):

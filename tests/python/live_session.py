@@ -121,6 +121,10 @@ def main():
                     "joint_msgs_bad": m.joint_msgs_bad, "p50": m.loop_us_p50,
                     "p99": m.loop_us_p99, "max": m.loop_us_max} for m in got["status"]],
         "wrench": [list(m.force) + list(m.torque) for m in got["wrench"]],
+        "model": [{"method": m.method, "identified": m.identified, "projected": m.projected,
+                   "phi": list(m.phi), "phi_std": list(m.phi_std), "mass": m.mass,
+                   "com": list(m.com), "inertia_com": list(m.inertia_com),
+                   "load_name": m.load_name} for m in got["model"]],
     }))
 
 

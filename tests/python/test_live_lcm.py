@@ -115,6 +115,26 @@ def test_final_estimates_equal_offline(session, recording, tmp_path):
         np.testing.assert_allclose(e["phi"], o["phi"], rtol=1e-9, atol=1e-12)
 
 
+def test_load_model_at_done_equals_offline(session, recording, tmp_path):
+    """One load_model_t on LOADID_MODEL at DONE: the primary method's
+    (RTLS: every group identified, first in estimation.methods), its model
+    as --offline computes it."""
+    models = session["model"]
+    assert len(models) == 1, models
+    m = models[0]
+    assert m["method"] == 3 and m["identified"] == 7 and m["load_name"] == "o1"
+    cfg = tmp_path / "offline.yaml"
+    cfg.write_text(re.sub(r"^results:\n(  .*\n)+", "", session["config"].read_text(), flags=re.M))
+    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(cfg), "--offline", str(recording)],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    o = next(o for o in json.loads(r.stdout) if o["method"] == "RTLS")
+    np.testing.assert_allclose(m["phi"], o["model_phi"], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(m["phi_std"], o["phi_std"], rtol=1e-6)
+    assert bool(m["projected"]) == o["projected"]
+    np.testing.assert_allclose(m["com"], o["model"]["com"], rtol=1e-9, atol=1e-12)
+
+
 def test_status_counts_and_loop_times(session):
     st = session["status"]
     assert len(st) >= 3
