@@ -288,12 +288,12 @@ static void run_refined(loadid_pipeline_t *p) {
         return;
     }
     const loadid_noise_levels_t *l = &p->refined_rep.levels;
-    note(p, "REFINED: %lld samples; a - g from the %s (sensor error %.3g m/s^2), alpha from the %s "
-            "(sensor error %.3g rad/s^2); levels f %.3g N, tau %.3g N m, a - g %.3g, alpha %.3g, "
-            "omega %.3g",
-         (long long)p->refined_rep.samples, p->refined_rep.spec_from_sensor ? "sensor" : "joints",
-         p->refined_rep.sensor_spec_error, p->refined_rep.alpha_from_sensor ? "sensor" : "joints",
-         p->refined_rep.sensor_alpha_error, l->force, l->torque, l->spec, l->alpha, l->omega);
+    note(p, "REFINED: %lld samples on the smoothed joints (jerk PSD %.3g; the accelerometer "
+            "differs from them by %.3g m/s^2, %.3g rad/s^2 RMS); rows f %.3g N, tau %.3g N m (of "
+            "which unexplained %.3g, %.3g)",
+         (long long)p->refined_rep.samples, p->refined_rep.jerk_psd, p->refined_rep.sensor_spec_error,
+         p->refined_rep.sensor_alpha_error, l->force, l->torque, p->refined_rep.unexplained[0],
+         p->refined_rep.unexplained[1]);
 }
 
 static void finish_estimation(loadid_pipeline_t *p, int64_t utime, int by_stop) {

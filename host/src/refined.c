@@ -7,14 +7,13 @@
 #include <string.h>
 
 #define JOINT_MARGIN_US 250000 /* joint history smoothed before the window */
-/* The accelerometer is kept unless its measured error exceeds this many
- * times the smoothed joints' error: the joints' figure is the smoother's
- * covariance, which knows the encoders' quantisation but not backlash,
- * elasticity or an imprecise URDF, while the accelerometer measures the
- * load's own motion. On the simulated RX60 (2e-4 rad backlash) a - g from
- * the smoothed joints cost 2.9 % of the mass against 0.7 % from the
- * accelerometer, whose measured error was 1.9 times the joints' figure. */
-#define SENSOR_PREFERENCE 3.0
+/* The smoothed joints' columns are treated as exact (the mixed LS-TLS
+ * limit): their noise is set this far below the smoother's own figure.
+ * With that figure itself TLS over-corrected (2.9 % of the mass on the
+ * simulated RX60, against 0.3 % for a reference that treats them as
+ * exact): the white-jerk model's covariance overstates the error of a
+ * smooth 2 Hz motion. */
+#define EXACT_SCALE 1e-3
 
 typedef struct {
     int64_t t;
@@ -25,15 +24,19 @@ struct loadid_refined {
     int n_joints;
     loadid_kin_t *kin;
     loadid_jf_config_t jf;
-    double smooth_sigma[3]; /* the smoother's steady q, qd, qdd errors at 1 kHz */
     /* joint ring */
     int jcap, jhead, jcount;
     int64_t *jt;
     loadid_real_t *jq; /* jcap x n_joints */
     /* window */
     int scap, scount;
+    int count; /* joint entries smoothed (t_lin, qs, qds, qdds) */
     int64_t dropped;
     window_sample_t *s;
+    loadid_real_t *kin_store; /* per sample: a - g, omega, alpha from the smoothed joints */
+    unsigned char *kin_ok;
+    loadid_real_t *best_kin, *best_q[3]; /* the best trial's, swapped with the above */
+    unsigned char *best_ok;
     /* run-time work, linear in time order */
     int64_t *t_lin;
     loadid_real_t *q_lin, *work, *qs, *qds, *qdds; /* qs..: jcap x n_joints */
@@ -54,7 +57,6 @@ int loadid_refined_create(const loadid_config_t *cfg, const loadid_chain_t *chai
     loadid_jf_config_default(&r->jf);
     r->jf.jerk_psd = (loadid_real_t)cfg->kalman_jerk_psd;
     r->jf.meas_sigma = (loadid_real_t)cfg->kalman_meas_sigma;
-    rc = loadid_jf_steady_sigma(&r->jf, 1e-3, 1, r->smooth_sigma);
     /* Up to 2 kHz of joints over the window and a second around it. */
     r->jcap = (int)ceil((cfg->duration_s + 1.0) * 2000.0);
     r->scap = (int)ceil(cfg->duration_s * 2000.0) + 100;
@@ -62,13 +64,19 @@ int loadid_refined_create(const loadid_config_t *cfg, const loadid_chain_t *chai
     r->jt = malloc((size_t)r->jcap * sizeof *r->jt);
     r->jq = malloc(nj * sizeof *r->jq);
     r->s = malloc((size_t)r->scap * sizeof *r->s);
+    r->kin_store = malloc((size_t)r->scap * 9 * sizeof *r->kin_store);
+    r->kin_ok = malloc((size_t)r->scap);
+    r->best_kin = malloc((size_t)r->scap * 9 * sizeof *r->best_kin);
+    r->best_ok = malloc((size_t)r->scap);
     r->t_lin = malloc((size_t)r->jcap * sizeof *r->t_lin);
     r->q_lin = malloc((size_t)r->jcap * sizeof *r->q_lin);
     r->work = malloc(loadid_jf_smooth_work_size((size_t)r->jcap) * sizeof *r->work);
     r->qs = malloc(nj * sizeof *r->qs);
     r->qds = malloc(nj * sizeof *r->qds);
     r->qdds = malloc(nj * sizeof *r->qdds);
-    if (rc == 0 && !(r->jt && r->jq && r->s && r->t_lin && r->q_lin && r->work && r->qs && r->qds &&
+    for (int i = 0; i < 3; ++i) r->best_q[i] = malloc(nj * sizeof *r->best_q[i]);
+    if (rc == 0 && !(r->jt && r->jq && r->s && r->kin_store && r->kin_ok && r->best_kin &&
+                     r->best_ok && r->best_q[0] && r->best_q[1] && r->best_q[2] && r->t_lin && r->q_lin && r->work && r->qs && r->qds &&
                      r->qdds))
         rc = -ENOMEM;
     if (rc) {
@@ -85,6 +93,11 @@ void loadid_refined_destroy(loadid_refined_t *r) {
     free(r->jt);
     free(r->jq);
     free(r->s);
+    free(r->kin_store);
+    free(r->kin_ok);
+    free(r->best_kin);
+    free(r->best_ok);
+    for (int i = 0; i < 3; ++i) free(r->best_q[i]);
     free(r->t_lin);
     free(r->q_lin);
     free(r->work);
@@ -124,7 +137,7 @@ void loadid_refined_sample(loadid_refined_t *r, int64_t t_us, const loadid_real_
 
 /* Smooths every joint over the ring's entries from first_t on; returns how
  * many entries (in t_lin, and qs/qds/qdds joint-major), or a negative code. */
-static int smooth_joints(loadid_refined_t *r, int64_t first_t) {
+static int smooth_joints(loadid_refined_t *r, const loadid_jf_config_t *jf, int64_t first_t) {
     int count = 0;
     for (int k = 0; k < r->jcount; ++k) {
         const int slot = (r->jhead + k) % r->jcap;
@@ -138,7 +151,7 @@ static int smooth_joints(loadid_refined_t *r, int64_t first_t) {
             r->q_lin[k] = r->jq[(size_t)slot * (size_t)r->n_joints + (size_t)j];
         }
         const size_t off = (size_t)j * (size_t)r->jcap;
-        const int rc = loadid_jf_smooth(&r->jf, (size_t)count, r->t_lin, r->q_lin, r->work,
+        const int rc = loadid_jf_smooth(jf, (size_t)count, r->t_lin, r->q_lin, r->work,
                                         r->qs + off, r->qds + off, r->qdds + off);
         if (rc) return rc;
     }
@@ -164,86 +177,217 @@ static int joints_at(const loadid_refined_t *r, int count, int *k, int64_t t, lo
 
 static double sq(double v) { return v * v; }
 
+/* The estimator's levels: the wrench rows as given, the smoothed joints'
+ * columns EXACT_SCALE of the smoother's own figure (treated as exact). */
+static int weigh(loadid_est_t *est, const loadid_noise_levels_t *lv, double omega_rms) {
+    loadid_est_config_t ec = *loadid_est_config(est);
+    int rc = loadid_noise_weights(lv, fmax(omega_rms, 1e-3), &ec);
+    if (rc == 0) rc = loadid_est_set_weights(est, ec.row_sigma, ec.col_weight);
+    return rc;
+}
+
+/* Feeds every sample with kinematics to est; returns the samples fed. */
+static int64_t feed(const loadid_refined_t *r, int n_params, const loadid_real_t g_init[3],
+                    loadid_est_t *est) {
+    int64_t fed = 0;
+    for (int i = 0; i < r->scount; ++i) {
+        if (!r->kin_ok[i]) continue;
+        const loadid_real_t *k = r->kin_store + 9 * (size_t)i; /* a - g, omega, alpha */
+        loadid_real_t A[6 * 16];
+        if (loadid_regressor_model(k, k + 3, k + 6, n_params, g_init, A)) continue;
+        if (loadid_est_update(est, A, NULL, r->s[i].y) == 0) fed++;
+    }
+    return fed;
+}
+
+/* Solves the n x n symmetric positive definite M x = b in place (Cholesky,
+ * row-major, double); 0, or -1 when M is not positive definite. */
+static int spd_solve(double *M, double *b, int n) {
+    for (int j = 0; j < n; ++j) {
+        double d = M[j * n + j];
+        for (int k = 0; k < j; ++k) d -= M[j * n + k] * M[j * n + k];
+        if (!(d > 0)) return -1;
+        M[j * n + j] = sqrt(d);
+        for (int i = j + 1; i < n; ++i) {
+            double v = M[i * n + j];
+            for (int k = 0; k < j; ++k) v -= M[i * n + k] * M[j * n + k];
+            M[i * n + j] = v / M[j * n + j];
+        }
+    }
+    for (int i = 0; i < n; ++i) { /* L z = b, then L^T x = z */
+        for (int k = 0; k < i; ++k) b[i] -= M[i * n + k] * b[k];
+        b[i] /= M[i * n + i];
+    }
+    for (int i = n - 1; i >= 0; --i) {
+        for (int k = i + 1; k < n; ++k) b[i] -= M[k * n + i] * b[k];
+        b[i] /= M[i * n + i];
+    }
+    return 0;
+}
+
+/* The smoothed joints' kinematics of every sample (kin_store, kin_ok) for
+ * the smoother jf; returns the samples with kinematics, or a negative code. */
+static int64_t kinematics(loadid_refined_t *r, const loadid_jf_config_t *jf) {
+    const int count = smooth_joints(r, jf, r->s[0].t - JOINT_MARGIN_US);
+    if (count < 0) return count;
+    loadid_real_t q[LOADID_MAX_JOINTS], qd[LOADID_MAX_JOINTS], qdd[LOADID_MAX_JOINTS];
+    loadid_kin_state_t ks;
+    int64_t used = 0;
+    int k = 0;
+    for (int i = 0; i < r->scount; ++i) {
+        r->kin_ok[i] = joints_at(r, count, &k, r->s[i].t, q, qd, qdd) == 0 &&
+                       loadid_kin_eval(r->kin, q, qd, qdd, &ks) == 0;
+        if (!r->kin_ok[i]) continue;
+        loadid_real_t *store = r->kin_store + 9 * (size_t)i;
+        for (int a = 0; a < 3; ++a)
+            store[a] = ks.spec[a], store[3 + a] = ks.omega[a], store[6 + a] = ks.alpha[a];
+        used++;
+    }
+    r->count = count;
+    return used;
+}
+
+/* The weighted residual of a least-squares fit on the stored kinematics
+ * (rows weighted by force_sigma, torque_sigma), by the normal equations;
+ * +Inf when they are singular. rss_group (may be NULL): the force and the
+ * torque rows' unweighted residual sums of squares. */
+static double fit_residual(const loadid_refined_t *r, int n_params, const loadid_real_t g_init[3],
+                           double force_sigma, double torque_sigma, double rss_group[2]) {
+    const int n = n_params;
+    double M[16 * 16] = {0}, b[16] = {0}, yy = 0;
+    for (int i = 0; i < r->scount; ++i) {
+        if (!r->kin_ok[i]) continue;
+        const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
+        loadid_real_t A[6 * 16];
+        if (loadid_regressor_model(k, k + 3, k + 6, n, g_init, A)) continue;
+        for (int row = 0; row < 6; ++row) {
+            const double w = 1.0 / sq(row < 3 ? force_sigma : torque_sigma);
+            const double y = (double)r->s[i].y[row];
+            const loadid_real_t *a = A + row * n;
+            for (int p = 0; p < n; ++p) {
+                if (a[p] == 0) continue;
+                b[p] += w * a[p] * y;
+                for (int q = 0; q <= p; ++q) M[p * n + q] += w * a[p] * a[q];
+            }
+            yy += w * y * y;
+        }
+    }
+    for (int p = 0; p < n; ++p)
+        for (int q = 0; q < p; ++q) M[q * n + p] = M[p * n + q];
+    double x[16];
+    memcpy(x, b, sizeof x);
+    if (spd_solve(M, x, n)) return INFINITY;
+    double fit = 0; /* rss = y^T W y - b^T x at the solution */
+    for (int p = 0; p < n; ++p) fit += b[p] * x[p];
+    if (rss_group) {
+        loadid_real_t phi[16];
+        for (int p = 0; p < n; ++p) phi[p] = (loadid_real_t)x[p];
+        rss_group[0] = rss_group[1] = 0;
+        for (int i = 0; i < r->scount; ++i) {
+            if (!r->kin_ok[i]) continue;
+            const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
+            loadid_real_t A[6 * 16], pred[6];
+            if (loadid_regressor_model(k, k + 3, k + 6, n, g_init, A)) continue;
+            loadid_regressor_apply(A, n, phi, pred);
+            for (int row = 0; row < 6; ++row)
+                rss_group[row / 3] += sq((double)(r->s[i].y[row] - pred[row]));
+        }
+    }
+    return yy - fit;
+}
+
 int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_accel,
                        const double channel[LOADID_NOISE_CHANNELS], int channel_source,
                        const loadid_real_t g_init[3], int n_params, loadid_est_t *est,
                        loadid_refined_report_t *rep) {
     memset(rep, 0, sizeof *rep);
     if (r->scount < 2) return LOADID_E_NOT_EXCITED;
-    const int count = smooth_joints(r, r->s[0].t - JOINT_MARGIN_US);
-    if (count < 0) return count;
-
-    /* Pass 1: the kinematics of every sample (kept in place of nothing:
-     * recomputed in pass 2, which is cheaper than storing them), the
-     * accelerometer's discrepancy and the RMS |omega|. */
-    loadid_real_t q[LOADID_MAX_JOINTS], qd[LOADID_MAX_JOINTS], qdd[LOADID_MAX_JOINTS];
-    loadid_kin_state_t ks;
-    double d_spec = 0, d_alpha = 0, w2 = 0;
-    int64_t used = 0;
-    int k = 0;
-    for (int i = 0; i < r->scount; ++i) {
-        if (joints_at(r, count, &k, r->s[i].t, q, qd, qdd) || loadid_kin_eval(r->kin, q, qd, qdd, &ks))
-            continue;
-        for (int a = 0; a < 3; ++a) {
-            d_spec += sq((double)r->s[i].lin[a] - (double)ks.spec[a]);
-            d_alpha += sq((double)r->s[i].ang[a] - (double)ks.alpha[a]);
-            w2 += sq((double)ks.omega[a]);
-        }
-        used++;
-    }
-    if (used < 2) return LOADID_E_NO_DATA;
-    rep->omega_rms = sqrt(w2 / (double)used);
-
-    /* The smoothed joints' own errors at the window's middle pose. */
-    double js = 0, ja = 0, jw = 0;
-    k = 0;
-    if (joints_at(r, count, &k, r->s[r->scount / 2].t, q, qd, qdd) == 0)
-        loadid_noise_joint_levels(r->kin, q, r->smooth_sigma[1], r->smooth_sigma[2], &js, &ja, &jw);
-    /* The accelerometer's error: its discrepancy less the joints' part,
-     * never below its white noise. */
-    int spec_sensor = 0, alpha_sensor = 0;
-    if (has_accel) {
-        const double ws = sqrt((sq(channel[6]) + sq(channel[7]) + sq(channel[8])) / 3.0);
-        const double wa = sqrt((sq(channel[9]) + sq(channel[10]) + sq(channel[11])) / 3.0);
-        rep->sensor_spec_error = fmax(sqrt(fmax(d_spec / (3.0 * (double)used) - js * js, 0)), ws);
-        rep->sensor_alpha_error = fmax(sqrt(fmax(d_alpha / (3.0 * (double)used) - ja * ja, 0)), wa);
-        spec_sensor = rep->sensor_spec_error < SENSOR_PREFERENCE * js;
-        alpha_sensor = rep->sensor_alpha_error < SENSOR_PREFERENCE * ja;
-    }
-    rep->spec_from_sensor = spec_sensor;
-    rep->alpha_from_sensor = alpha_sensor;
-
-    /* The levels: the wrench's as measured (or configured), the sources'
-     * errors as found above. */
+    /* The wrench's measured (or configured) noise, for the rows. */
     loadid_config_t c = *cfg;
     c.noise_given &= LOADID_NOISE_GIVEN_FORCE | LOADID_NOISE_GIVEN_TORQUE;
-    c.noise_linear = c.kalman_spec_sigma = fmax(spec_sensor ? rep->sensor_spec_error : js, 1e-9);
-    c.noise_angular = c.kalman_alpha_sigma = fmax(alpha_sensor ? rep->sensor_alpha_error : ja, 1e-9);
-    c.noise_omega = fmax(jw, 1e-12);
-    c.noise_given |= LOADID_NOISE_GIVEN_LINEAR | LOADID_NOISE_GIVEN_ANGULAR | LOADID_NOISE_GIVEN_OMEGA |
-                     LOADID_NOISE_GIVEN_KF_SPEC | LOADID_NOISE_GIVEN_KF_ALPHA;
-    loadid_noise_combine(&c, spec_sensor, alpha_sensor, channel, channel_source, js, ja, jw,
-                         &rep->levels);
-    rep->levels.source[2] = spec_sensor ? channel_source : LOADID_NOISE_FILTER;
-    rep->levels.source[3] = alpha_sensor ? channel_source : LOADID_NOISE_FILTER;
-    rep->levels.source[4] = LOADID_NOISE_FILTER;
-    loadid_est_config_t ec = *loadid_est_config(est);
-    int rc = loadid_noise_weights(&rep->levels, fmax(rep->omega_rms, 1e-3), &ec);
-    if (rc == 0) rc = loadid_est_set_weights(est, ec.row_sigma, ec.col_weight);
-    if (rc) return rc;
+    loadid_noise_combine(&c, 0, 0, channel, channel_source, 1, 1, 1, &rep->levels);
 
-    /* Pass 2: the regressor of every sample into the batch TLS. */
-    k = 0;
-    for (int i = 0; i < r->scount; ++i) {
-        if (joints_at(r, count, &k, r->s[i].t, q, qd, qdd) || loadid_kin_eval(r->kin, q, qd, qdd, &ks))
-            continue;
-        loadid_real_t spec[3], alpha[3], A[6 * 16];
-        for (int a = 0; a < 3; ++a) {
-            spec[a] = spec_sensor ? r->s[i].lin[a] : ks.spec[a];
-            alpha[a] = alpha_sensor ? r->s[i].ang[a] : ks.alpha[a];
-        }
-        if (loadid_regressor_model(spec, ks.omega, alpha, n_params, g_init, A)) continue;
-        if (loadid_est_update(est, A, NULL, r->s[i].y) == 0) rep->samples++;
+    /* The smoother's bandwidth from the data: of the configured jerk PSD
+     * and four lower ones (each a factor 10, the bandwidth 1.47 times
+     * lower), the one whose kinematics explain the measured wrench best. A
+     * smoother too wide keeps what the encoders see but the load does not
+     * (backlash, noise); one too narrow blunts the motion. */
+    loadid_jf_config_t jf = r->jf;
+    double best = INFINITY, best_psd = (double)r->jf.jerk_psd;
+    int64_t used = 0;
+    int best_count = 0;
+    for (int trial = 0; trial < 5; ++trial) {
+        jf.jerk_psd = (loadid_real_t)((double)r->jf.jerk_psd * pow(10.0, -trial));
+        const int64_t n = kinematics(r, &jf);
+        if (n < 2) continue;
+        const double rss = fit_residual(r, n_params, g_init, rep->levels.force, rep->levels.torque,
+                                        NULL);
+        if (!(rss < best)) continue;
+        best = rss, best_psd = (double)jf.jerk_psd, used = n, best_count = r->count;
+        /* Keep this trial's kinematics and smoothed joints: swap the stores. */
+        loadid_real_t *t = r->kin_store;
+        r->kin_store = r->best_kin, r->best_kin = t;
+        unsigned char *o = r->kin_ok;
+        r->kin_ok = r->best_ok, r->best_ok = o;
+        loadid_real_t *sj[3] = {r->qs, r->qds, r->qdds};
+        r->qs = r->best_q[0], r->qds = r->best_q[1], r->qdds = r->best_q[2];
+        r->best_q[0] = sj[0], r->best_q[1] = sj[1], r->best_q[2] = sj[2];
     }
-    return rep->samples > 0 ? 0 : LOADID_E_NOT_EXCITED;
+    if (used < 2) return LOADID_E_NO_DATA;
+    { /* the best back in place */
+        loadid_real_t *t = r->kin_store;
+        r->kin_store = r->best_kin, r->best_kin = t;
+        unsigned char *o = r->kin_ok;
+        r->kin_ok = r->best_ok, r->best_ok = o;
+        loadid_real_t *sj[3] = {r->qs, r->qds, r->qdds};
+        r->qs = r->best_q[0], r->qds = r->best_q[1], r->qdds = r->best_q[2];
+        r->best_q[0] = sj[0], r->best_q[1] = sj[1], r->best_q[2] = sj[2];
+        r->count = best_count;
+    }
+    jf.jerk_psd = (loadid_real_t)best_psd;
+    rep->jerk_psd = best_psd;
+    double smooth_sigma[3];
+    loadid_jf_steady_sigma(&jf, 1e-3, 1, smooth_sigma);
+
+    /* The accelerometer's difference to the smoothed joints (reported) and
+     * the RMS |omega| (omega's column scale). */
+    double d_spec = 0, d_alpha = 0, w2 = 0;
+    for (int i = 0; i < r->scount; ++i) {
+        if (!r->kin_ok[i]) continue;
+        const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
+        for (int a = 0; a < 3; ++a) {
+            d_spec += sq((double)r->s[i].lin[a] - (double)k[a]);
+            d_alpha += sq((double)r->s[i].ang[a] - (double)k[6 + a]);
+            w2 += sq((double)k[3 + a]);
+        }
+    }
+    rep->omega_rms = sqrt(w2 / (double)used);
+    if (has_accel) {
+        rep->sensor_spec_error = sqrt(d_spec / (3.0 * (double)used));
+        rep->sensor_alpha_error = sqrt(d_alpha / (3.0 * (double)used));
+    }
+    loadid_real_t q[LOADID_MAX_JOINTS], qd[LOADID_MAX_JOINTS], qdd[LOADID_MAX_JOINTS];
+    int k = 0;
+
+    /* The smoothed joints' own errors at the window's middle pose, scaled
+     * down to "exact". */
+    double js = 0, ja = 0, jw = 0;
+    if (joints_at(r, r->count, &k, r->s[r->scount / 2].t, q, qd, qdd) == 0)
+        loadid_noise_joint_levels(r->kin, q, smooth_sigma[1], smooth_sigma[2], &js, &ja, &jw);
+    loadid_noise_combine(&c, 0, 0, channel, channel_source, fmax(js * EXACT_SCALE, 1e-12),
+                         fmax(ja * EXACT_SCALE, 1e-12), fmax(jw * EXACT_SCALE, 1e-15), &rep->levels);
+
+    /* The rows' noise raised by what of a least-squares fit's residual the
+     * wrench's noise does not explain, then the TLS fit. */
+    double rss[2];
+    fit_residual(r, n_params, g_init, rep->levels.force, rep->levels.torque, rss);
+    const double dof = fmax(3.0 * (double)used - n_params / 2.0, 1.0);
+    rep->unexplained[0] = sqrt(fmax(rss[0] / dof - sq(rep->levels.force), 0));
+    rep->unexplained[1] = sqrt(fmax(rss[1] / dof - sq(rep->levels.torque), 0));
+    rep->levels.force = hypot(rep->levels.force, rep->unexplained[0]);
+    rep->levels.torque = hypot(rep->levels.torque, rep->unexplained[1]);
+    const int rc = weigh(est, &rep->levels, rep->omega_rms);
+    if (rc) return rc;
+    rep->samples = feed(r, n_params, g_init, est);
+    return rep->samples > 1 ? 0 : LOADID_E_NOT_EXCITED;
 }

@@ -112,13 +112,15 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
         fputs("},\n   \"noise\": ", out);
         levels(out, &st->noise);
         if (ref && e->method == LOADID_METHOD_REFINED) {
-            fprintf(out, ",\n   \"refined\": {\"samples\": %lld, \"spec_from\": \"%s\", "
-                         "\"alpha_from\": \"%s\", \"sensor_spec_error\": ",
-                    (long long)ref->samples, ref->spec_from_sensor ? "sensor" : "joints",
-                    ref->alpha_from_sensor ? "sensor" : "joints");
+            fprintf(out, ",\n   \"refined\": {\"samples\": %lld, \"sensor_spec_error\": ",
+                    (long long)ref->samples);
             number(out, ref->sensor_spec_error);
             fputs(", \"sensor_alpha_error\": ", out);
             number(out, ref->sensor_alpha_error);
+            fputs(", \"unexplained\": ", out);
+            array(out, ref->unexplained, 2);
+            fputs(", \"jerk_psd\": ", out);
+            number(out, ref->jerk_psd);
             fputs(", \"omega_rms\": ", out);
             number(out, ref->omega_rms);
             fputs(", \"levels\": ", out);

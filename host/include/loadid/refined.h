@@ -5,25 +5,28 @@
  *   joints   every accepted joint state is kept (a ring of the last
  *            duration + 1 s); at the end each joint's measured positions
  *            are smoothed by the RTS smoother of the joint filter's model
- *            (no lag, a quarter of the filter's qdd error), and q, qd, qdd
- *            interpolated to each sensor sample's time; forward kinematics
- *            gives omega, alpha and a - g.
- *   sources  omega always from the smoothed joints. a - g and alpha from
- *            the sensor's accelerometer unless its measured error is over
- *            3 times the smoothed joints' (then from the joints): the
- *            joints' error is the smoother's own steady-state covariance
- *            (loadid_jf_steady_sigma through the kinematics), which does
- *            not know backlash, elasticity or URDF errors, hence the
- *            preference for the direct measurement; the accelerometer's is
- *            its RMS difference to the smoothed joints over the window less
- *            the joints' part, and never below its white noise, so a
- *            vibration or a bias in a channel counts against it, which its
- *            noise figure alone would not show.
- *   weights  loadid_est_weights_from_noise with the wrench's measured noise,
- *            the chosen sources' errors, and the RMS |omega| of the window.
- *            A source far better than the wrench gets a large column weight:
- *            TLS then treats its columns as nearly exact (the mixed LS-TLS
- *            limit), which is what they are.
+ *            (no lag), and q, qd, qdd interpolated to each sensor sample's
+ *            time; forward kinematics gives omega, alpha and a - g. The
+ *            smoother's bandwidth is chosen from the data: of
+ *            kalman.jerk_psd and four lower ones (factors of 10), the one
+ *            whose kinematics let a least-squares fit explain the measured
+ *            wrench best (too wide keeps backlash and noise the load does
+ *            not feel, too narrow blunts the motion).
+ *   sources  a - g, omega and alpha all from the smoothed joints. The
+ *            accelerometer's a - g and alpha are not used: in the study
+ *            (tools/study) a batch TLS on them had 3.8 times the mass error
+ *            and 16 times the inertia error of one on smoothed encoders, and
+ *            a vibration or a bias in a channel (which its noise figure
+ *            does not show) cannot reach REFINED. Their RMS difference to
+ *            the smoothed joints is reported.
+ *   weights  the smoothed joints' columns are treated as exact (the mixed
+ *            LS-TLS limit: their noise set 1e-3 of the smoother's own
+ *            covariance, whose white-jerk model overstates the error of a
+ *            smooth motion, and with which TLS over-corrected), the rows by
+ *            the wrench's measured noise plus what of a first fit's residual
+ *            that noise does not explain (backlash between the motor-side
+ *            encoders and the load, elasticity, URDF errors); then the final
+ *            fit. omega's column scale is the window's RMS |omega|.
  * Runs once, off the per-sample path, on storage allocated at create.
  */
 #ifndef LOADID_REFINED_H
@@ -44,12 +47,13 @@ typedef struct loadid_refined loadid_refined_t; /* opaque */
 
 typedef struct {
     int64_t samples;           /* fed to the estimator */
-    int spec_from_sensor;      /* a - g from the accelerometer (else joints) */
-    int alpha_from_sensor;     /* alpha from the accelerometer (else joints) */
-    double sensor_spec_error;  /* the accelerometer's measured errors [m/s^2, */
-    double sensor_alpha_error; /*   rad/s^2]; 0 without an accelerometer */
+    double sensor_spec_error;  /* the accelerometer's RMS difference to the */
+    double sensor_alpha_error; /*   smoothed joints [m/s^2, rad/s^2]; 0 without one */
+    double unexplained[2];     /* force [N] and torque [N m] residual beyond the
+                                  wrench's noise, added to the rows' levels */
     double omega_rms;          /* [rad/s], the column scale used */
-    loadid_noise_levels_t levels; /* the levels the weights used */
+    double jerk_psd;           /* the smoother's, chosen from the data */
+    loadid_noise_levels_t levels; /* the levels the final weights used */
 } loadid_refined_report_t;
 
 /* Allocates the stores for cfg's window. Returns 0, -EINVAL or -ENOMEM. */
