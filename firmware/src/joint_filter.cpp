@@ -20,6 +20,7 @@
 #include <new>
 
 #include "finite.hpp"
+#include "joint_filter_steady.hpp"
 
 using Real = loadid_real_t;
 
@@ -39,7 +40,8 @@ bool positive_finite(Real v) { return std::isfinite(v) && v > 0; }
 bool valid_config(const loadid_jf_config_t *c) {
     return c && positive_finite(c->jerk_psd) && positive_finite(c->meas_sigma) &&
            positive_finite(c->init_sigma_vel) && positive_finite(c->init_sigma_acc) &&
-           c->max_step_us > 0;
+           c->max_step_us > 0 && c->lag_steps >= 0 && c->lag_steps <= LOADID_JF_MAX_LAG &&
+           (c->lag_steps == 0 || c->nominal_step_us > 0);
 }
 
 // |t1 - t0| in unsigned arithmetic: exact for any two int64 stamps.
@@ -144,11 +146,29 @@ Gauss load(const Real *w) {
 
 }  // namespace
 
+// The fixed-lag smoother's history: per update its time, the piece of the
+// series it belongs to (a restart after a gap begins a new one), each
+// joint's predicted state x(k|k-1) and innovation nu(k), in a ring of
+// lag + 1.
+struct LagEntry {
+    int64_t t;
+    int piece;
+    Real xpred[kMaxJoints][3];
+    Real nu[kMaxJoints];
+};
+
 struct loadid_jf {
     loadid_jf_config_t cfg;
     int n;
     int64_t last;  // INT64_MIN: no measurement since create or reset
     Gauss joint[kMaxJoints];
+    // Fixed-lag smoothing (cfg.lag_steps > 0): gains B_i, i = 0..lag, and
+    // the ring of the last lag + 1 updates since the filters (re)started.
+    Real gain[LOADID_JF_MAX_LAG + 1][3];
+    LagEntry ring[LOADID_JF_MAX_LAG + 1];
+    int ring_head, ring_count;  // the oldest entry, and how many
+    int piece;                  // the current piece of the series
+    int64_t piece_start;        // the time of its first update (no entry)
 };
 
 extern "C" int loadid_jf_config_default(loadid_jf_config_t *cfg) {
@@ -160,6 +180,8 @@ extern "C" int loadid_jf_config_default(loadid_jf_config_t *cfg) {
     cfg->init_sigma_vel = 1;
     cfg->init_sigma_acc = 10;
     cfg->max_step_us = 100000;
+    cfg->lag_steps = 0;
+    cfg->nominal_step_us = 1000;
     return 0;
 }
 
@@ -172,6 +194,13 @@ extern "C" int loadid_jf_create(int num_joints, const loadid_jf_config_t *cfg, l
     jf->cfg = *cfg;
     jf->n = num_joints;
     jf->last = INT64_MIN;
+    jf->ring_head = jf->ring_count = 0;
+    if (cfg->lag_steps > 0) {
+        double g[LOADID_JF_MAX_LAG + 1][3];
+        loadid::fixed_lag_gains(*cfg, double(cfg->nominal_step_us) * 1e-6, cfg->lag_steps, g);
+        for (int i = 0; i <= cfg->lag_steps; ++i)
+            for (int c = 0; c < 3; ++c) jf->gain[i][c] = Real(g[i][c]);
+    }
     *out = jf;
     return 0;
 }
@@ -181,6 +210,8 @@ extern "C" void loadid_jf_destroy(loadid_jf_t *jf) { delete jf; }
 extern "C" int loadid_jf_reset(loadid_jf_t *jf) {
     if (!jf) return -EINVAL;
     jf->last = INT64_MIN;
+    jf->ring_head = jf->ring_count = 0;
+    jf->piece = 0;
     return 0;
 }
 
@@ -190,12 +221,30 @@ extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real
     const bool first = jf->last == INT64_MIN;
     if (!first && t_us <= jf->last) return LOADID_E_TIME_ORDER;
     const Real r = jf->cfg.meas_sigma * jf->cfg.meas_sigma;
+    const int lag = jf->cfg.lag_steps;
     if (first || is_gap(jf->last, t_us, jf->cfg)) {
         for (int i = 0; i < jf->n; ++i) initialise(jf->joint[i], q[i], jf->cfg);
+        // The smoother restarts with the filter; the last piece's updates
+        // stay (smoothed with what came after them in it) until pushed out.
+        ++jf->piece;
+        jf->piece_start = t_us;
     } else {
         const Real dt = seconds(jf->last, t_us);
+        LagEntry *e = nullptr;
+        if (lag > 0) {  // the ring keeps lag + 1 updates
+            const int size = lag + 1;
+            if (jf->ring_count == size) jf->ring_head = (jf->ring_head + 1) % size;
+            else ++jf->ring_count;
+            e = &jf->ring[(jf->ring_head + jf->ring_count - 1) % size];
+            e->t = t_us;
+            e->piece = jf->piece;
+        }
         for (int i = 0; i < jf->n; ++i) {
             predict(jf->joint[i], dt, jf->cfg.jerk_psd);
+            if (e) {
+                for (int c = 0; c < 3; ++c) e->xpred[i][c] = jf->joint[i].x[c];
+                e->nu[i] = q[i] - jf->joint[i].x[0];
+            }
             correct(jf->joint[i], q[i], r);
         }
     }
@@ -219,6 +268,60 @@ extern "C" int loadid_jf_state_at(const loadid_jf_t *jf, int64_t t_us, loadid_re
 }
 
 extern "C" int64_t loadid_jf_last_time(const loadid_jf_t *jf) { return jf ? jf->last : INT64_MIN; }
+
+// The entry that is index k of the ring, oldest first.
+static const LagEntry &ring_at(const loadid_jf_t *jf, int k) {
+    return jf->ring[(jf->ring_head + k) % (jf->cfg.lag_steps + 1)];
+}
+
+// Entries of the current piece at the ring's end.
+static int current_entries(const loadid_jf_t *jf) {
+    int k = 0;
+    while (k < jf->ring_count && ring_at(jf, jf->ring_count - 1 - k).piece == jf->piece) ++k;
+    return k;
+}
+
+extern "C" int64_t loadid_jf_lagged_time(const loadid_jf_t *jf) {
+    if (!jf || jf->cfg.lag_steps <= 0 || jf->last == INT64_MIN) return INT64_MIN;
+    const int lag = jf->cfg.lag_steps, cur = current_entries(jf);
+    // The current piece: up to the first update without lag_steps after it.
+    if (cur > lag) return ring_at(jf, jf->ring_count - lag).t - 1;
+    // Else what an earlier piece left: up to this piece's start.
+    if (cur < jf->ring_count) return jf->piece_start - 1;
+    return INT64_MIN;
+}
+
+// The newest kept update at or before t serves it: with lag_steps updates
+// after it in its piece, or, in a piece that has ended, with those it had.
+extern "C" int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, int64_t max_age_us,
+                                         loadid_real_t *q, loadid_real_t *qd,
+                                         loadid_real_t *qdd) {
+    if (!jf || jf->cfg.lag_steps <= 0) return -EINVAL;
+    const int lag = jf->cfg.lag_steps;
+    if (jf->ring_count == 0) return LOADID_E_NO_DATA;
+    int j = jf->ring_count - 1;
+    while (j >= 0 && ring_at(jf, j).t > t_us) --j;
+    if (j < 0) return LOADID_E_STALE;  // before every kept update
+    const LagEntry &e0 = ring_at(jf, j);
+    int after = 0;  // updates after it in its piece
+    while (j + after + 1 < jf->ring_count && after < lag &&
+           ring_at(jf, j + after + 1).piece == e0.piece)
+        ++after;
+    if (e0.piece == jf->piece && after < lag) return LOADID_E_NO_DATA;  // not smoothed yet
+    if (distance_us(e0.t, t_us) > uint64_t(max_age_us)) return LOADID_E_STALE;
+    const Real dt = seconds(e0.t, t_us), h = dt * dt / 2;
+    for (int i = 0; i < jf->n; ++i) {
+        Real x[3] = {e0.xpred[i][0], e0.xpred[i][1], e0.xpred[i][2]};
+        for (int k = 0; k <= after; ++k) {
+            const Real nu = ring_at(jf, j + k).nu[i];
+            for (int c = 0; c < 3; ++c) x[c] += jf->gain[k][c] * nu;
+        }
+        if (q) q[i] = x[0] + dt * x[1] + h * x[2];
+        if (qd) qd[i] = x[1] + dt * x[2];
+        if (qdd) qdd[i] = x[2];
+    }
+    return 0;
+}
 
 extern "C" size_t loadid_jf_smooth_work_size(size_t count) {
     return count > SIZE_MAX / kWorkPerSample ? SIZE_MAX : count * kWorkPerSample;

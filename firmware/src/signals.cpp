@@ -34,7 +34,8 @@ void destroy(loadid_signals *s) {
     delete s;
 }
 
-// Is a joint stream close enough to t to be evaluated there?
+// Is a joint stream close enough to t to be evaluated there? (Without the
+// fixed-lag smoother; with it, loadid_jf_lagged_state_at says so itself.)
 int stream_ready(const loadid_jf_t *jf, int64_t t_us, int64_t max_age_us) {
     int64_t last = loadid_jf_last_time(jf);
     if (last == INT64_MIN) return LOADID_E_NO_DATA;
@@ -46,10 +47,15 @@ int stream_ready(const loadid_jf_t *jf, int64_t t_us, int64_t max_age_us) {
     return 0;
 }
 
-int kinematics_of(const loadid_signals *s, const loadid_jf_t *jf, int64_t t_us,
+// The kinematics of a joint stream at t: the filter's state there (if
+// t is close enough to its newest update) or, with lag_steps, the
+// fixed-lag smoother's.
+int kinematics_of(const loadid_signals *s, const loadid_jf_t *jf, int lag, int64_t t_us,
                   loadid_kin_state_t *out) {
     loadid_real_t q[LOADID_MAX_JOINTS], qd[LOADID_MAX_JOINTS], qdd[LOADID_MAX_JOINTS];
-    int rc = loadid_jf_state_at(jf, t_us, q, qd, qdd);
+    int rc = lag > 0 ? loadid_jf_lagged_state_at(jf, t_us, s->cfg.max_joint_age_us, q, qd, qdd)
+                     : stream_ready(jf, t_us, s->cfg.max_joint_age_us);
+    if (rc == 0 && lag == 0) rc = loadid_jf_state_at(jf, t_us, q, qd, qdd);
     if (rc != 0) return rc;
     return loadid_kin_eval(s->kin, q, qd, qdd, out);
 }
@@ -180,8 +186,7 @@ extern "C" int loadid_signals_at(loadid_signals_t *s, int64_t t_us,
     int rc = 0;
     loadid_kin_state_t meas{}, set{};
     if (uses_measured) {
-        rc = stream_ready(s->measured, t_us, s->cfg.max_joint_age_us);
-        if (rc == 0) rc = kinematics_of(s, s->measured, t_us, &meas);
+        rc = kinematics_of(s, s->measured, s->cfg.measured.lag_steps, t_us, &meas);
         if (rc != 0) return refuse(s, rc);
     }
     if (uses_setpoint) {
@@ -189,8 +194,7 @@ extern "C" int loadid_signals_at(loadid_signals_t *s, int64_t t_us,
             rc = loadid_kin_eval(s->kin, exact_setpoint, exact_setpoint + s->n,
                                  exact_setpoint + 2 * s->n, &set);
         } else {
-            rc = stream_ready(s->setpoint, t_us, s->cfg.max_joint_age_us);
-            if (rc == 0) rc = kinematics_of(s, s->setpoint, t_us, &set);
+            rc = kinematics_of(s, s->setpoint, s->cfg.setpoint.lag_steps, t_us, &set);
         }
         if (rc != 0) return refuse(s, rc);
     }
@@ -219,8 +223,7 @@ extern "C" int loadid_signals_at(loadid_signals_t *s, int64_t t_us,
 extern "C" int loadid_signals_kinematics_at(const loadid_signals_t *s, int64_t t_us,
                                             loadid_kin_state_t *state) {
     if (!s || !state) return -EINVAL;
-    int rc = stream_ready(s->measured, t_us, s->cfg.max_joint_age_us);
-    return rc != 0 ? rc : kinematics_of(s, s->measured, t_us, state);
+    return kinematics_of(s, s->measured, s->cfg.measured.lag_steps, t_us, state);
 }
 
 extern "C" int loadid_signals_stats(const loadid_signals_t *s, loadid_signals_stats_t *stats) {
@@ -230,5 +233,7 @@ extern "C" int loadid_signals_stats(const loadid_signals_t *s, loadid_signals_st
 }
 
 extern "C" int64_t loadid_signals_last_joint_time(const loadid_signals_t *s) {
-    return s ? loadid_jf_last_time(s->measured) : INT64_MIN;
+    if (!s) return INT64_MIN;
+    return s->cfg.measured.lag_steps > 0 ? loadid_jf_lagged_time(s->measured)
+                                         : loadid_jf_last_time(s->measured);
 }

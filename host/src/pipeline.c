@@ -13,8 +13,9 @@
 #include "loadid/setup.h"
 
 #define MIN_ZEROING_SAMPLES 10
-#define PENDING_MAX 64 /* samples waiting for joint data: 64 ms at 1 kHz */
+#define PENDING_MAX 512 /* samples waiting for joint data (and the fixed lag): 0.5 s at 1 kHz */
 #define NOISE_MAX_GAP_US 20000 /* third differences need consecutive samples */
+#define COMMANDS_MAX 16 /* commands waiting for the fixed lag (50 ms: a few at most) */
 
 struct loadid_pipeline {
     loadid_config_t cfg;
@@ -32,7 +33,8 @@ struct loadid_pipeline {
     loadid_noise_acc_t noise;
     loadid_noise_levels_t levels;     /* the on-line estimators' */
     loadid_kin_t *kin;                /* the joint levels at the pose */
-    double filter_sigma[3];           /* the joint filter's steady q, qd, qdd errors */
+    double filter_sigma[3];           /* the joint filter's (or fixed-lag smoother's)
+                                         noise share of its q, qd, qdd errors */
     loadid_real_t last_q[LOADID_MAX_JOINTS];
     int have_q;
     int has_accel;                    /* the sensor has an accelerometer (JR3) */
@@ -73,6 +75,15 @@ struct loadid_pipeline {
      * streams a process happened to read first (live equals offline). */
     loadid_jr3_sample_t pending[PENDING_MAX];
     int pending_head, pending_count;
+    /* With the fixed-lag smoother, commands wait here too, until the joint
+     * data cover their utime: the samples before a command must be served
+     * (smoothed) before it acts, as they are without the lag. */
+    struct {
+        int64_t utime;
+        int action;
+        char load_name[LOADID_LOAD_NAME_MAX];
+    } commands[COMMANDS_MAX];
+    int commands_head, commands_count;
 };
 
 static void flush_pending(loadid_pipeline_t *p, int64_t before, int ready);
@@ -129,11 +140,9 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
         what = "the kinematics";
     }
     if (rc == 0) {
-        loadid_jf_config_t jf;
-        loadid_jf_config_default(&jf);
-        jf.jerk_psd = (loadid_real_t)cfg->kalman_jerk_psd;
-        jf.meas_sigma = (loadid_real_t)cfg->kalman_meas_sigma;
-        rc = loadid_jf_steady_sigma(&jf, 1e-3, 0, p->filter_sigma);
+        /* The measurement noise's share of what the joints give the
+         * estimators: the on-line filter's, or the fixed-lag smoother's. */
+        rc = loadid_jf_noise_sigma(&scfg.measured, cfg->kalman_joint_period_s, p->filter_sigma);
         what = "the joint filter's noise";
     }
     p->num_methods = cfg->num_methods;
@@ -337,13 +346,14 @@ static void advance(loadid_pipeline_t *p, int64_t utime) {
     if (p->state == LOADID_STATE_ESTIMATING && utime >= p->est_end_us) finish_estimation(p, utime, 1);
 }
 
-/* The clock ends a window only TICK_GRACE_US after its end, so that a
- * window normally ends by its samples' own times (as offline) and by the
- * clock only when samples stop coming. */
+/* The clock ends a window only TICK_GRACE_US (plus the smoother's lag)
+ * after its end, so that a window normally ends by its samples' own times
+ * (as offline) and by the clock only when samples stop coming. */
 #define TICK_GRACE_US 50000
 void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us) {
-    flush_pending(p, now_us - TICK_GRACE_US, 0); /* joints stopped: serve (or refuse) them */
-    advance(p, now_us - TICK_GRACE_US);
+    const int64_t grace = TICK_GRACE_US + llround(p->cfg.kalman_lag_s * 1e6);
+    flush_pending(p, now_us - grace, 0); /* joints stopped: serve (or refuse) them */
+    advance(p, now_us - grace);
 }
 
 void loadid_pipeline_finish(loadid_pipeline_t *p, int64_t now_us) {
@@ -412,9 +422,28 @@ static void apply_measured_noise(loadid_pipeline_t *p) {
          loadid_noise_source_name(l->source[4]));
 }
 
+static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const char *load_name);
+
 void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
                              const char *load_name) {
+    if (p->cfg.kalman_lag_s > 0) {
+        /* Acts once the joint data cover its utime (flush_pending). A full
+         * queue (commands faster than the lag) serves the oldest now. */
+        if (p->commands_count == COMMANDS_MAX) flush_pending(p, p->commands[p->commands_head].utime + 1, 0);
+        const int slot = (p->commands_head + p->commands_count) % COMMANDS_MAX;
+        p->commands[slot].utime = utime;
+        p->commands[slot].action = action;
+        snprintf(p->commands[slot].load_name, sizeof p->commands[slot].load_name, "%s",
+                 load_name ? load_name : "");
+        p->commands_count++;
+        flush_pending(p, INT64_MIN, 1);
+        return;
+    }
     flush_pending(p, utime, 0); /* what came before the command goes first */
+    run_command(p, utime, action, load_name);
+}
+
+static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const char *load_name) {
     advance(p, utime);
     switch (action) {
         case LOADID_CMD_ZERO:
@@ -554,12 +583,23 @@ static void pop_pending(loadid_pipeline_t *p) {
  * that joint data now covers. */
 static void flush_pending(loadid_pipeline_t *p, int64_t before, int ready) {
     const int64_t joints = loadid_signals_last_joint_time(p->sig);
-    while (p->pending_count > 0) {
-        const int64_t t = p->pending[p->pending_head].t_us;
-        if (t < before || (ready && t <= joints))
+    for (;;) {
+        /* The earlier of the next sample and the next waiting command; a
+         * sample at a command's utime after it, as without the lag. */
+        if (!p->pending_count && !p->commands_count) return;
+        const int64_t ts = p->pending_count ? p->pending[p->pending_head].t_us : INT64_MAX;
+        const int64_t tc = p->commands_count ? p->commands[p->commands_head].utime : INT64_MAX;
+        const int sample = p->pending_count && (!p->commands_count || ts < tc);
+        const int64_t t = sample ? ts : tc;
+        if (!(t < before || (ready && t <= joints))) return;
+        if (sample) {
             pop_pending(p);
-        else
-            break;
+        } else {
+            const int h = p->commands_head;
+            p->commands_head = (h + 1) % COMMANDS_MAX;
+            p->commands_count--;
+            run_command(p, p->commands[h].utime, p->commands[h].action, p->commands[h].load_name);
+        }
     }
 }
 

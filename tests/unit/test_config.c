@@ -167,7 +167,7 @@ static void assert_defaults(const loadid_config_t *c) {
     assert_int_equal(c->methods[0], LOADID_METHOD_RTLS);
     assert_int_equal(c->methods[1], LOADID_METHOD_RIV);
     assert_int_equal(c->methods[2], LOADID_METHOD_RLS);
-    assert_int_equal(c->signals, LOADID_SIGNALS_MIXED);
+    assert_int_equal(c->signals, LOADID_SIGNALS_KF);
     assert_int_equal(c->offset_model_estimate, 0);
     ASSERT_EQ_D(c->duration_s, 1.5);
     assert_int_equal(c->publish_every, 1);

@@ -559,6 +559,15 @@ static void test_steady_sigma_is_the_models_error(void **state) {
             for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
             L[i][j] = i == j ? sqrt(s) : s / L[j][j];
         }
+    /* The fixed-lag smoother (50 steps) on the same runs: against the RTS
+     * smoother of the whole run, and against the truth. */
+    loadid_jf_config_t lcfg = cfg;
+    lcfg.lag_steps = 50;
+    loadid_jf_t *lagged;
+    assert_int_equal(loadid_jf_create(1, &lcfg, &lagged), 0);
+    static loadid_real_t lq[MC_STEPS], lqd[MC_STEPS], lqdd[MC_STEPS];
+    double dl = 0, el = 0;
+    long nl = 0;
     static int64_t t[MC_STEPS];
     static loadid_real_t z[MC_STEPS], work[9 * MC_STEPS], sq[MC_STEPS], sqd[MC_STEPS], sqdd[MC_STEPS];
     static double truth[MC_STEPS][3];
@@ -571,11 +580,22 @@ static void test_steady_sigma_is_the_models_error(void **state) {
     for (int run = 0; run < MC_RUNS; ++run) {
         double x[3] = {0.3, 0.5 * loadid_rng_normal(&rng), 5 * loadid_rng_normal(&rng)};
         loadid_jf_reset(jf);
+        loadid_jf_reset(lagged);
         for (int k = 0; k < MC_STEPS; ++k) {
             t[k] = T0 + k * 1000;
             memcpy(truth[k], x, sizeof x);
             z[k] = (loadid_real_t)(x[0] + r * loadid_rng_normal(&rng));
             assert_int_equal(loadid_jf_update(jf, t[k], &z[k]), 0);
+            assert_int_equal(loadid_jf_update(lagged, t[k], &z[k]), 0);
+            if (k >= 51) { /* update k - 50 has its 50 after it (the first only starts the filter) */
+                assert_int_equal(loadid_jf_lagged_time(lagged), t[k - 49] - 1);
+                assert_int_equal(loadid_jf_lagged_state_at(lagged, t[k - 50], 5000, &lq[k - 50],
+                                                           &lqd[k - 50], &lqdd[k - 50]), 0);
+                assert_int_equal(loadid_jf_lagged_state_at(lagged, t[k - 49], 5000, NULL, NULL, NULL),
+                                 LOADID_E_NO_DATA);
+            } else {
+                assert_int_equal(loadid_jf_lagged_time(lagged), INT64_MIN);
+            }
             loadid_real_t fq, fqd, fqdd;
             loadid_jf_state_at(jf, t[k], &fq, &fqd, &fqdd);
             if (k >= 150) {
@@ -592,9 +612,14 @@ static void test_steady_sigma_is_the_models_error(void **state) {
             const double e[3] = {sq[k] - truth[k][0], sqd[k] - truth[k][1], sqdd[k] - truth[k][2]};
             for (int i = 0; i < 3; ++i) es[i] += e[i] * e[i];
             ns++;
+            dl += (lqdd[k] - sqdd[k]) * (lqdd[k] - sqdd[k]);
+            el += (lqdd[k] - truth[k][2]) * (lqdd[k] - truth[k][2]);
+            nl++;
         }
     }
     loadid_jf_destroy(jf);
+    loadid_jf_destroy(lagged);
+    dl = sqrt(dl / nl), el = sqrt(el / nl);
     for (int i = 0; i < 3; ++i) ef[i] = sqrt(ef[i] / nf), es[i] = sqrt(es[i] / ns);
     print_message("steady sigma q, qd, qdd: filter %.3g %.3g %.3g (Monte Carlo %.3g %.3g %.3g), "
                   "smoother %.3g %.3g %.3g (Monte Carlo %.3g %.3g %.3g)\n",
@@ -607,13 +632,72 @@ static void test_steady_sigma_is_the_models_error(void **state) {
         assert_true(fabs(es[i] / ss[i] - 1) < tol);
     }
     assert_true(ss[2] < 0.5 * sf[2]); /* the smoother's point */
+    print_message("fixed-lag smoother (50 steps): qdd %.3g from the truth, %.3g from the RTS "
+                  "smoother of the whole run\n", el, dl);
+    /* 50 steps are many times the smoother's memory: the same as RTS, to
+     * a few % of its error (seen 1 %); its error is the smoother's. */
+    assert_true(dl < 0.05 * ss[2]);
+    assert_true(fabs(el / ss[2] - 1) < tol);
     assert_int_equal(loadid_jf_steady_sigma(&cfg, 0, 0, sf), -EINVAL);
     assert_int_equal(loadid_jf_steady_sigma(NULL, 1e-3, 0, sf), -EINVAL);
+}
+
+/* loadid_jf_noise_sigma: the measurement noise's share of the errors, for
+ * the filter and the fixed-lag smoother, against a Monte Carlo with no
+ * process noise at all (a constant acceleration, which the model follows
+ * without bias): what is left is the noise's response. */
+static void test_noise_sigma_is_the_noise_response(void **state) {
+    (void)state;
+    for (int lag = 0; lag <= 50; lag += 50) {
+        loadid_jf_config_t cfg;
+        loadid_jf_config_default(&cfg);
+        cfg.lag_steps = lag;
+        double ns[3];
+        assert_int_equal(loadid_jf_noise_sigma(&cfg, 1e-3, ns), 0);
+        loadid_jf_t *jf;
+        assert_int_equal(loadid_jf_create(1, &cfg, &jf), 0);
+        loadid_rng_t rng;
+        loadid_rng_seed(&rng, 77 + lag);
+        double e[3] = {0, 0, 0};
+        long n = 0;
+        const double r = (double)cfg.meas_sigma, a = 3.0;
+        for (int k = 0; k < 20000; ++k) {
+            const int64_t tk = T0 + (int64_t)k * 1000;
+            const double ts = k * 1e-3;
+            const loadid_real_t z = (loadid_real_t)(0.2 + 0.5 * ts + a * ts * ts / 2 +
+                                                    r * loadid_rng_normal(&rng));
+            assert_int_equal(loadid_jf_update(jf, tk, &z), 0);
+            if (k < 500 + lag) continue;
+            const int j = lag ? k - lag : k;
+            const double tj = j * 1e-3;
+            loadid_real_t q, qd, qdd;
+            if (lag)
+                assert_int_equal(loadid_jf_lagged_state_at(jf, T0 + (int64_t)j * 1000, 5000, &q, &qd, &qdd), 0);
+            else
+                assert_int_equal(loadid_jf_state_at(jf, tk, &q, &qd, &qdd), 0);
+            const double d[3] = {q - (0.2 + 0.5 * tj + a * tj * tj / 2), qd - (0.5 + a * tj), qdd - a};
+            for (int c = 0; c < 3; ++c) e[c] += d[c] * d[c];
+            n++;
+        }
+        loadid_jf_destroy(jf);
+        for (int c = 0; c < 3; ++c) e[c] = sqrt(e[c] / n);
+        print_message("%s: noise share of qd, qdd %.3g %.3g (Monte Carlo %.3g %.3g)\n",
+                      lag ? "fixed-lag smoother" : "filter", ns[1], ns[2], e[1], e[2]);
+        /* q grows to 600 rad: float's rounding of it swamps the noise. */
+        if (IS_FLOAT) continue;
+        for (int c = 1; c < 3; ++c) assert_true(fabs(e[c] / ns[c] - 1) < 0.1);
+    }
+    loadid_jf_config_t bad;
+    loadid_jf_config_default(&bad);
+    double ns[3];
+    bad.lag_steps = LOADID_JF_MAX_LAG + 1;
+    assert_int_equal(loadid_jf_noise_sigma(&bad, 1e-3, ns), -EINVAL);
 }
 
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_steady_sigma_is_the_models_error),
+        cmocka_unit_test(test_noise_sigma_is_the_noise_response),
         cmocka_unit_test(test_config_default),
         cmocka_unit_test(test_filter_multisine),
         cmocka_unit_test(test_filter_jittered),

@@ -84,10 +84,11 @@ static void expect_error(const char *text, const char *rest, int whole)
 static void config_errors(void **state)
 {
     (void)state;
-    expect_error("sensor:\n  type: modbus\n",
-                 "2: sensor.type: a Modbus F/T sensor has no accelerometer: estimation.signals "
-                 "must be kf or setpoint, got mixed (the default)",
-                 1);
+    /* The default source, kf, takes a - g and alpha from the joints. */
+    loadid_config_t ok;
+    char okerr[512];
+    assert_int_equal(load_text("sensor:\n  type: modbus\n", &ok, okerr, sizeof okerr), 0);
+    assert_int_equal(ok.signals, LOADID_SIGNALS_KF);
     expect_error("estimation:\n  signals: sensor\nsensor:\n  type: modbus\n",
                  "4: sensor.type: a Modbus F/T sensor has no accelerometer: estimation.signals "
                  "must be kf or setpoint, got sensor",

@@ -82,6 +82,7 @@ typedef struct {
     dataset_t d[2];
     loadid_est_t *est[NEST];
     loadid_signals_t *sig;
+    loadid_signals_t *sig_lag; /* with the fixed-lag smoother */
     int64_t t_us[NSAMPLES];
     loadid_real_t q[NSAMPLES][NJ];
     loadid_real_t *smooth_work;
@@ -111,6 +112,8 @@ static void signals_make(workload_t *w) {
     loadid_signals_config_t cfg;
     loadid_signals_config_default(&cfg);
     assert_int_equal(loadid_signals_create(&c, g, &cfg, &w->sig), 0);
+    cfg.measured.lag_steps = cfg.setpoint.lag_steps = 20;
+    assert_int_equal(loadid_signals_create(&c, g, &cfg, &w->sig_lag), 0);
     for (int k = 0; k < NSAMPLES; ++k) {
         w->t_us[k] = 1700000000000000LL + 1000LL * k;
         for (int i = 0; i < NJ; ++i) w->q[k][i] = (loadid_real_t)(0.3 * sin(0.01 * k * (i + 1)));
@@ -130,6 +133,12 @@ static int signals_run(workload_t *w) {
         if (loadid_signals_push_joints(w->sig, w->t_us[k], NJ, w->q[k], w->q[k]) != 0) ++bad;
         loadid_regressor_input_t m, instr;
         if (loadid_signals_at(w->sig, w->t_us[k] + 300, spec, alpha, NULL, &m, &instr) != 0) ++bad;
+        /* The fixed-lag smoother serves a sample 20 joint states later. */
+        if (loadid_signals_push_joints(w->sig_lag, w->t_us[k], NJ, w->q[k], w->q[k]) != 0) ++bad;
+        if (k >= 21 && loadid_signals_last_joint_time(w->sig_lag) != w->t_us[k - 19] - 1) ++bad;
+        if (k >= 21 &&
+            loadid_signals_at(w->sig_lag, w->t_us[k - 20] + 300, spec, alpha, NULL, &m, &instr) != 0)
+            ++bad;
         if (k == NSAMPLES / 2) {
             if (loadid_signals_push_joints(w->sig, w->t_us[k], NJ, w->q[k], NULL) != LOADID_E_TIME_ORDER) ++bad;
             if (loadid_signals_at(w->sig, w->t_us[k] + 60000, spec, alpha, NULL, &m, &instr) != LOADID_E_STALE) ++bad;
@@ -142,6 +151,7 @@ static int signals_run(workload_t *w) {
     if (loadid_jf_smooth(&jcfg, NSAMPLES, w->t_us, w->q1, w->smooth_work, w->smoothed[0],
                          w->smoothed[1], w->smoothed[2]) != 0) ++bad;
     if (loadid_signals_reset(w->sig) != 0) ++bad;
+    if (loadid_signals_reset(w->sig_lag) != 0) ++bad;
     return bad;
 }
 
@@ -165,6 +175,7 @@ static void workload_make(workload_t *w) {
 static void workload_free(workload_t *w) {
     for (int i = 0; i < NEST; ++i) loadid_est_destroy(w->est[i]);
     loadid_signals_destroy(w->sig);
+    loadid_signals_destroy(w->sig_lag);
     free(w->smooth_work);
     dataset_free(&w->d[0]);
     dataset_free(&w->d[1]);

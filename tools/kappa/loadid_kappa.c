@@ -128,6 +128,10 @@ static int run(const loadid_config_t *cfg, const loadid_chain_t *chain, const ch
     k->n_params = cfg->offset_model_estimate ? LOADID_NPHI_OFFSET : LOADID_NPHI;
     loadid_signals_config_t scfg;
     loadid_setup_signals(cfg, LOADID_SIGNALS_KF, &scfg);
+    /* Table I's kappa_sens and kappa_kf are of the causal filter, as the
+     * paper has them; this reader serves each sample as it comes, which the
+     * fixed-lag smoother (kalman.lag_s) could not. */
+    scfg.measured.lag_steps = scfg.setpoint.lag_steps = 0;
     loadid_jr3_config_t jcfg;
     loadid_setup_jr3(cfg, &jcfg);
     loadid_est_config_t ecfg;

@@ -710,9 +710,13 @@ def sim_key(noise_cell):
     return (tuple(sorted(c["sim"].items())), c["vib"])
 
 
-def est_config(robot, noise_cell, methods) -> str:
+def est_config(robot, noise_cell, methods, signals=None, lag=None) -> str:
     c = NOISE_CELLS[noise_cell]
     text = robot_yaml(robot) + f"estimation:\n  methods: [{', '.join(methods)}]\n"
+    if signals:
+        text += f"  signals: {signals}\n"
+    if lag is not None:
+        text += f"kalman:\n  lag_s: {lag!r}\n"
     if c["est"] is not None:
         text += "noise:\n" + "".join(f"  {k}: {v!r}\n" for k, v in c["est"].items())
     return text
@@ -1148,6 +1152,11 @@ def main(argv=None) -> int:
                     "recordings, results (default a new temporary folder, kept)")
     ap.add_argument("--out", default=None, help="where runs.csv and summary.json go (default the workdir)")
     ap.add_argument("--jobs", type=int, default=2, help="recordings processed in parallel (default 2)")
+    ap.add_argument("--signals", default=None,
+                    help="estimation.signals for the estimators (default: the configuration's)")
+    ap.add_argument("--lag", type=float, default=None,
+                    help="kalman.lag_s, the on-line fixed-lag smoother's lag (default: the "
+                         "configuration's)")
     ap.add_argument("--quick", action="store_true",
                     help="3 seeds, rx60, loads o1 and box, paper noise (options given override)")
     ap.add_argument("--keep", action="store_true", help="keep the recordings (about 1 MB each)")
@@ -1201,7 +1210,7 @@ def main(argv=None) -> int:
         est_cfgs = {}
         for noise in noises:
             p = work / "configs" / f"est-{robot}-{noise}.yaml"
-            p.write_text(est_config(robot, noise, methods))
+            p.write_text(est_config(robot, noise, methods, a.signals, a.lag))
             est_cfgs[noise] = p
         for load in loads:
             groups = {}

@@ -53,7 +53,19 @@ typedef struct {
      * filters from the new measurement (a stream that stalled is not
      * bridged by extrapolation). Default 100000 (0.1 s). */
     int64_t max_step_us;
+    /* Fixed-lag smoothing (loadid_jf_lagged_state_at): the state of an
+     * update is smoothed with the lag_steps updates after it, by the
+     * steady-state fixed-lag smoother of this model at a step of
+     * nominal_step_us (x(j|j+L) = x(j|j-1) + sum_i B_i nu(j+i), B_i =
+     * P- [(F (I - K H))^T]^i H^T / s; Anderson & Moore 1979, ch. 7): no
+     * lag in the result, the smoother's error instead of the filter's, for
+     * L steps of delay. 0 (default) turns it off; at most
+     * LOADID_JF_MAX_LAG. nominal_step_us: default 1000 (1 kHz). */
+    int lag_steps;
+    int64_t nominal_step_us;
 } loadid_jf_config_t;
+
+#define LOADID_JF_MAX_LAG 200
 
 /* Fills cfg with the defaults. Returns 0 or -EINVAL. */
 int loadid_jf_config_default(loadid_jf_config_t *cfg);
@@ -86,6 +98,25 @@ int loadid_jf_state_at(const loadid_jf_t *jf, int64_t t_us, loadid_real_t *q,
 /* Time of the last accepted update [us]; INT64_MIN before the first. */
 int64_t loadid_jf_last_time(const loadid_jf_t *jf);
 
+/* With lag_steps > 0: the newest time the fixed-lag smoother can serve
+ * now: 1 us before the first update of the current piece of the series
+ * that has fewer than lag_steps updates after it, or, while the current
+ * piece (since a restart after a gap) has no such update yet, 1 us before
+ * its start (what the piece before it left is served with the updates it
+ * had); INT64_MIN when there is nothing. */
+int64_t loadid_jf_lagged_time(const loadid_jf_t *jf);
+
+/* With lag_steps > 0: the smoothed state at t_us, from the newest kept
+ * update at or before t_us (the last lag_steps + 1 are kept), with the
+ * lag_steps updates after it, or, in a piece that ended at a gap, with
+ * those it had; propagated by the model to t_us. Returns 0; -EINVAL (NULL
+ * jf, or lag_steps 0); LOADID_E_NO_DATA (nothing yet, or that update has
+ * fewer than lag_steps after it and its piece goes on); LOADID_E_STALE
+ * (that update is more than max_age_us before t_us, or t_us is before
+ * every kept update). Any output may be NULL. */
+int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, int64_t max_age_us,
+                              loadid_real_t *q, loadid_real_t *qd, loadid_real_t *qdd);
+
 /* Number of reals loadid_jf_smooth needs as work space for count samples
  * (9 per sample). */
 size_t loadid_jf_smooth_work_size(size_t count);
@@ -113,6 +144,16 @@ int loadid_jf_smooth(const loadid_jf_config_t *cfg, size_t count,
  * model. Returns 0 or -EINVAL (NULL, bad config, dt_s not finite > 0). */
 int loadid_jf_steady_sigma(const loadid_jf_config_t *cfg, double dt_s, int smoothed,
                            double sigma[3]);
+
+/* The measurement noise's share of the errors of q, qd and qdd, in steady
+ * state at a constant step dt_s: the on-line filter's (cfg->lag_steps 0)
+ * or the fixed-lag smoother's (lag_steps > 0), from their impulse response
+ * to a position measurement (sigma^2 = meas_sigma^2 sum_k h_k^2). Unlike
+ * loadid_jf_steady_sigma this leaves out the white-jerk model's process
+ * noise, which a smooth motion does not have: it is the random, motion-
+ * independent part of the error, what TLS's column weights are for.
+ * Returns 0 or -EINVAL. */
+int loadid_jf_noise_sigma(const loadid_jf_config_t *cfg, double dt_s, double sigma[3]);
 
 #ifdef __cplusplus
 }

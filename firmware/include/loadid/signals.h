@@ -17,7 +17,11 @@
  * joint quantities are evaluated at each sensor sample's time by the
  * filters' model (loadid_jf_state_at), and a sample whose nearest joint
  * state is further away than max_joint_age_us (or that comes before any
- * joint state) is refused and counted, never served from old data.
+ * joint state) is refused and counted, never served from old data. With
+ * the filters' lag_steps > 0 they are the fixed-lag smoother's instead
+ * (loadid_jf_lagged_state_at): no lag, but a sample can be served only
+ * lag_steps joint states after its time (loadid_signals_last_joint_time
+ * then says up to when).
  */
 #ifndef LOADID_SIGNALS_H
 #define LOADID_SIGNALS_H
@@ -57,7 +61,8 @@ typedef struct {
     loadid_jf_config_t measured;      /* filter of the encoder positions */
     loadid_jf_config_t setpoint;      /* filter of the commanded positions */
     /* A sensor sample further than this from the newest joint state [us]
-     * is refused as stale. Default 5000 (five joint periods at 1 kHz). */
+     * (with the fixed-lag smoother: from the smoothed one it is served
+     * from) is refused as stale. Default 5000 (five joint periods at 1 kHz). */
     int64_t max_joint_age_us;
 } loadid_signals_config_t;
 
@@ -123,7 +128,8 @@ int loadid_signals_stats(const loadid_signals_t *s,
 
 /* Time of the newest accepted joint state [us]; INT64_MIN before the
  * first (or for a NULL s). A sensor sample no later than this has joint
- * data on both sides of it. */
+ * data on both sides of it. With the fixed-lag smoother (the measured
+ * filter's lag_steps > 0): the newest time it can serve now. */
 int64_t loadid_signals_last_joint_time(const loadid_signals_t *s);
 
 #ifdef __cplusplus

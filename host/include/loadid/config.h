@@ -72,7 +72,8 @@ typedef struct {
     /* estimation: */
     int num_methods;                    /* default 3: RTLS, RIV, RLS */
     int methods[LOADID_MAX_METHODS];    /* loadid_method_t values, in file order */
-    int signals;                        /* loadid_signal_source_t; default MIXED */
+    int signals;                        /* loadid_signal_source_t; default KF (with
+                                           kalman.lag_s, measured best by the study) */
     int offset_model_estimate;          /* 0: "zeroing" (default), 1: "estimate" */
     double duration_s;                  /* default 1.5 */
     int publish_every;                  /* estimation.publish_every: (loadid) live,
@@ -150,6 +151,15 @@ typedef struct {
     double kalman_jerk_psd;             /* default: loadid_jf_config_default */
     double kalman_meas_sigma;           /* default: loadid_jf_config_default */
     double kalman_max_joint_age_s;      /* default 0.005 */
+    double kalman_lag_s;                /* kalman.lag_s: the on-line fixed-lag
+                                           smoother's lag [s]: the estimators run
+                                           this far behind the newest joint state,
+                                           on zero-lag joint signals; 0 = the
+                                           causal filter; default 0.05, at most
+                                           kalman.joint_period_s * 200 */
+    double kalman_joint_period_s;       /* kalman.joint_period_s: the joint
+                                           stream's period [s], for the smoother's
+                                           steady gains; default 0.001 */
     /* Noise of what the filters and the kinematics derive, for the
      * estimators' weights when a - g or alpha come from the joints (the
      * kf, setpoint and mixed sources; the JR3's own are noise.linear and
