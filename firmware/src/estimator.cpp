@@ -179,6 +179,13 @@ extern "C" int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real
     return rc;
 }
 
+extern "C" int loadid_est_signal_to_noise(const loadid_est_t *est, const loadid_real_t *phi,
+                                          loadid_real_t snr[3]) {
+    if (!est || !phi || !snr) return -EINVAL;
+    if (!all_finite(phi, est->cfg.n_params)) return LOADID_E_NONFINITE;
+    return est->signal_to_noise(phi, snr);
+}
+
 extern "C" const loadid_est_config_t *loadid_est_config(const loadid_est_t *est) {
     return est ? &est->cfg : nullptr;
 }

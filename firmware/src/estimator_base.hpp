@@ -23,6 +23,8 @@ struct loadid_est {
     // One standard deviation of each element of phi (this method's estimate)
     // and the a-posteriori noise scale (uncertainty.hpp).
     virtual int uncertainty(const loadid_real_t *phi, loadid_real_t *std, loadid_real_t *scale) const = 0;
+    // loadid_est_signal_to_noise (uncertainty.hpp's group_snr).
+    virtual int signal_to_noise(const loadid_real_t *phi, loadid_real_t snr[3]) const = 0;
 
     loadid_est_config_t cfg;  // changed only by loadid_est_set_weights
 };

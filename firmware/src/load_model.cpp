@@ -49,15 +49,18 @@ extern "C" void loadid_model_config_default(loadid_model_config_t *cfg) {
     cfg->com_std = Real(0.005);
     cfg->inertia_rel_std = Real(0.3);
     cfg->max_gyration = Real(0.5);
+    cfg->min_snr = Real(1);
     cfg->fallback_density = Real(2700);
 }
 
 extern "C" int loadid_load_model(const loadid_real_t estimate[10], const loadid_real_t std[10],
-                                 const loadid_model_config_t *cfg, loadid_load_model_t *out) {
+                                 const loadid_real_t *snr, const loadid_model_config_t *cfg,
+                                 loadid_load_model_t *out) {
     if (!estimate || !std || !cfg || !out) return -EINVAL;
     if (!positive_finite(cfg->mass_rel_std) || !positive_finite(cfg->com_std) ||
         !positive_finite(cfg->inertia_rel_std) || !positive_finite(cfg->max_gyration) ||
-        !positive_finite(cfg->fallback_density))
+        !positive_finite(cfg->fallback_density) || !std::isfinite(cfg->min_snr) ||
+        cfg->min_snr < 0)
         return -EINVAL;
     if (!all_finite(estimate, LOADID_NPHI)) return LOADID_E_NONFINITE;
     *out = loadid_load_model_t{};
@@ -89,7 +92,8 @@ extern "C" int loadid_load_model(const loadid_real_t estimate[10], const loadid_
         for (int i = 4; i < LOADID_NPHI; ++i) smax = std::isnan(std[i]) ? std[i] : std::max(smax, std[i]);
         const Real scale = std::max(Ic_cons.trace() / Real(3), sphere_moment(m, cfg->fallback_density));
         const Real gyration = std::sqrt(std::max(Ic_cons.trace(), Real(0)) / (Real(2) * m));
-        if (within(smax, cfg->inertia_rel_std * scale) && gyration <= cfg->max_gyration)
+        const bool stands_out = !snr || snr[2] >= cfg->min_snr;
+        if (within(smax, cfg->inertia_rel_std * scale) && gyration <= cfg->max_gyration && stands_out)
             id |= LOADID_IDENT_INERTIA;
     }
     out->identified = id;

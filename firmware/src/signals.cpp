@@ -4,6 +4,7 @@
 #include "loadid/signals.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <new>
 
@@ -19,6 +20,10 @@ struct loadid_signals {
     loadid_jf_t *measured;
     loadid_jf_t *setpoint;
     loadid_signals_stats_t stats;
+    // The joint stamps' phase-locked loop: the last regularised time, the
+    // period, the last raw stamp (INT64_MIN: none yet).
+    double pll_t, pll_period;
+    int64_t pll_last_raw;
 };
 
 namespace {
@@ -70,6 +75,33 @@ void motion_of(const loadid_kin_state_t &k, loadid_regressor_input_t &m) {
     copy3(m.alpha, k.alpha);
 }
 
+// The joint stamp t_raw regularised (signals.h, stamp_gain): a second-order
+// phase-locked loop on the stream's own rate. Returns the time to use;
+// commit: update the loop (only for a stamp that is taken).
+int64_t regularise(loadid_signals *s, int64_t t_raw, bool commit) {
+    const double g = s->cfg.stamp_gain;
+    if (g >= 1) return t_raw;
+    double t = double(t_raw), period = s->pll_period;
+    if (s->pll_last_raw != INT64_MIN) {
+        const double measured = double(t_raw) - double(s->pll_last_raw);
+        const double pred = s->pll_t + period;
+        const double err = double(t_raw) - pred;
+        if (period > 0 && std::abs(err) <= 0.5 * period) {
+            t = pred + g * err;
+            period += g * g / 4 * err;  // critically damped
+        } else if (measured > 0) {
+            period = measured;  // resynchronise: the raw stamp, the last interval
+        }
+    }
+    const int64_t out = int64_t(std::llround(t));
+    if (commit) {
+        s->pll_t = t;
+        s->pll_period = period;
+        s->pll_last_raw = t_raw;
+    }
+    return out;
+}
+
 // Counts a refusal by its cause and passes the code on.
 int refuse(loadid_signals *s, int rc) {
     if (rc == LOADID_E_NO_DATA)
@@ -106,6 +138,7 @@ extern "C" int loadid_signals_config_default(loadid_signals_config_t *cfg) {
     loadid_jf_config_default(&cfg->measured);
     loadid_jf_config_default(&cfg->setpoint);
     cfg->max_joint_age_us = 5000;
+    cfg->stamp_gain = 0.005;
     return 0;
 }
 
@@ -113,6 +146,7 @@ extern "C" int loadid_signals_create(const loadid_chain_t *chain, const double g
                                      const loadid_signals_config_t *cfg, loadid_signals_t **out) {
     if (!chain || !gravity || !cfg || !out) return -EINVAL;
     if (!valid_source(enum_value(cfg->source)) || cfg->max_joint_age_us < 0) return -EINVAL;
+    if (!(cfg->stamp_gain > 0 && cfg->stamp_gain <= 1)) return -EINVAL;
     auto *s = new (std::nothrow) loadid_signals{};
     if (!s) return -ENOMEM;
     s->cfg = *cfg;
@@ -124,6 +158,7 @@ extern "C" int loadid_signals_create(const loadid_chain_t *chain, const double g
         return rc;
     }
     s->n = chain->num_joints;
+    s->pll_last_raw = INT64_MIN;
     *out = s;
     return 0;
 }
@@ -137,6 +172,7 @@ extern "C" int loadid_signals_reset(loadid_signals_t *s) {
     loadid_jf_reset(s->measured);
     loadid_jf_reset(s->setpoint);
     s->stats = loadid_signals_stats_t{};
+    s->pll_last_raw = INT64_MIN;
     return 0;
 }
 
@@ -146,6 +182,7 @@ extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int
                                           const loadid_real_t *position,
                                           const loadid_real_t *setpoint) {
     if (!s) return -EINVAL;
+    const int64_t raw = t_us;
     int rc = 0;
     // Everything is checked before either filter changes, so a refused
     // message leaves both exactly as they were.
@@ -153,8 +190,13 @@ extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int
         rc = -EBADMSG;
     else if (!all_finite(position, s->n) || (setpoint && !all_finite(setpoint, s->n)))
         rc = LOADID_E_NONFINITE;
-    else if (t_us <= loadid_jf_last_time(s->measured) ||
-             (setpoint && t_us <= loadid_jf_last_time(s->setpoint)))
+    else if (t_us <= s->pll_last_raw)
+        rc = LOADID_E_TIME_ORDER;
+    // The regularised stamp; a loop that has not locked yet may not go
+    // backwards in time.
+    if (rc == 0) t_us = regularise(s, t_us, false);
+    if (rc == 0 && (t_us <= loadid_jf_last_time(s->measured) ||
+                    (setpoint && t_us <= loadid_jf_last_time(s->setpoint))))
         rc = LOADID_E_TIME_ORDER;
     if (rc == 0) rc = loadid_jf_update(s->measured, t_us, position);
     if (rc == 0 && setpoint) rc = loadid_jf_update(s->setpoint, t_us, setpoint);
@@ -162,6 +204,7 @@ extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int
         ++s->stats.joint_msgs_bad;
         return rc;
     }
+    regularise(s, raw, true);
     ++s->stats.joint_msgs_ok;
     return 0;
 }
@@ -236,4 +279,8 @@ extern "C" int64_t loadid_signals_last_joint_time(const loadid_signals_t *s) {
     if (!s) return INT64_MIN;
     return s->cfg.measured.lag_steps > 0 ? loadid_jf_lagged_time(s->measured)
                                          : loadid_jf_last_time(s->measured);
+}
+
+extern "C" int64_t loadid_signals_newest_joint_time(const loadid_signals_t *s) {
+    return s ? loadid_jf_last_time(s->measured) : INT64_MIN;
 }

@@ -98,4 +98,25 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
     return 0;
 }
 
+int group_snr(const CovInput &in, Real snr[3]) {
+    const int n = in.n, n1 = n + 1;
+    snr[0] = snr[1] = snr[2] = 0;
+    const double rows = 6.0 * static_cast<double>(in.samples);
+    if (!(rows > 0)) return LOADID_E_NOT_EXCITED;
+    Vd t(n1);
+    for (int j = 0; j < n1; ++j) t(j) = static_cast<double>(in.t[j]);
+    const Md g = t.cwiseInverse().asDiagonal() * symmetric(in.gram, n1) * t.cwiseInverse().asDiagonal();
+    const int first[3] = {0, 1, 4}, count[3] = {1, 3, 6};
+    const double share[3] = {1.0, 1.0, 0.5};  // the inertia reaches the torque rows only
+    for (int grp = 0; grp < 3; ++grp) {
+        double e = 0;
+        for (int i = 0; i < count[grp]; ++i)
+            for (int j = 0; j < count[grp]; ++j)
+                e += static_cast<double>(in.phi[first[grp] + i]) * g(first[grp] + i, first[grp] + j) *
+                     static_cast<double>(in.phi[first[grp] + j]);
+        snr[grp] = static_cast<Real>(std::sqrt(std::max(e, 0.0) / (rows * share[grp])));
+    }
+    return 0;
+}
+
 }  // namespace loadid

@@ -44,4 +44,8 @@ struct CovInput {
 // when the information matrix is singular (std then +Inf).
 int covariance_std(const CovInput &in, Real *std, Real *scale);
 
+// loadid_est_signal_to_noise from the same information matrix (in.gram,
+// in.t, in.samples, in.phi; the rest unused).
+int group_snr(const CovInput &in, Real snr[3]);
+
 }  // namespace loadid

@@ -101,6 +101,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->kalman_meas_sigma = (double)jf.meas_sigma;
     cfg->kalman_max_joint_age_s = (double)sig.max_joint_age_us / 1e6;
     cfg->kalman_lag_s = 0.05;
+    cfg->kalman_stamp_gain = (double)sig.stamp_gain;
     cfg->kalman_joint_period_s = (double)jf.nominal_step_us / 1e6;
     cfg->rt_cpu = -1;
     cfg->kalman_spec_sigma = 0.5;
@@ -110,6 +111,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->model_inertia_rel_std = 0.3;
     cfg->model_max_gyration = 0.5;
     cfg->model_fallback_density = 2700.0;
+    cfg->model_min_snr = 1.0;
     cfg->sim_noise_force = 0.1;
     cfg->sim_noise_torque = 0.005;
     cfg->sim_noise_linear = 0.5;
@@ -490,6 +492,10 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
     TRY(read_number(s, "meas_sigma", &c->kalman_meas_sigma, POSITIVE));
     TRY(read_number(s, "max_joint_age_s", &c->kalman_max_joint_age_s, POSITIVE));
     TRY(read_number(s, "lag_s", &c->kalman_lag_s, NON_NEGATIVE));
+    if (read_number(s, "stamp_gain", &c->kalman_stamp_gain, POSITIVE) == 1 &&
+        c->kalman_stamp_gain > 1)
+        return loadid_yaml_fail(loadid_yaml_get(s, "stamp_gain"), "must be <= 1, got %g",
+                                c->kalman_stamp_gain);
     TRY(read_number(s, "joint_period_s", &c->kalman_joint_period_s, POSITIVE));
     if (c->kalman_lag_s > c->kalman_joint_period_s * LOADID_JF_MAX_LAG + 1e-12)
         return loadid_yaml_fail(loadid_yaml_get(s, "lag_s"),
@@ -504,6 +510,7 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
     TRY(read_number(s, "inertia_rel_std", &c->model_inertia_rel_std, POSITIVE));
     TRY(read_number(s, "max_gyration", &c->model_max_gyration, POSITIVE));
     TRY(read_number(s, "fallback_density", &c->model_fallback_density, POSITIVE));
+    TRY(read_number(s, "min_snr", &c->model_min_snr, NON_NEGATIVE));
     return 0;
 fail:
     return -EINVAL;

@@ -123,6 +123,7 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
     p->model_cfg.inertia_rel_std = (loadid_real_t)cfg->model_inertia_rel_std;
     p->model_cfg.max_gyration = (loadid_real_t)cfg->model_max_gyration;
     p->model_cfg.fallback_density = (loadid_real_t)cfg->model_fallback_density;
+    p->model_cfg.min_snr = (loadid_real_t)cfg->model_min_snr;
     loadid_noise_acc_reset(&p->noise);
 
     loadid_signals_config_t scfg;
@@ -192,8 +193,13 @@ static void model_of(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
     loadid_real_t std[16], scale = 0;
     if (loadid_est_uncertainty(p->est[m], phi, std, &scale) != 0)
         for (int i = 0; i < 16; ++i) std[i] = (loadid_real_t)INFINITY;
+    /* How far the load's groups stand out of the noise in the data. */
+    loadid_real_t load_n[16] = {0}, snr[3];
+    for (int i = 0; i < 10; ++i) load_n[i] = load[i];
+    const int have_snr = loadid_est_signal_to_noise(p->est[m], load_n, snr) == 0;
     loadid_load_model_t lm;
-    if (loadid_load_model(load, std, &p->model_cfg, &lm) != 0) return;
+    if (loadid_load_model(load, std, have_snr ? snr : NULL, &p->model_cfg, &lm) != 0) return;
+    for (int i = 0; i < 3; ++i) e->snr[i] = have_snr ? (double)snr[i] : NAN;
     e->has_model = 1;
     e->noise_scale = (double)scale;
     for (int i = 0; i < 10; ++i) e->phi_std[i] = (double)std[i];
@@ -379,7 +385,9 @@ void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_jo
     if (loadid_signals_push_joints(p->sig, utime, num_joints, pos, setpoint ? set : NULL) == 0) {
         memcpy(p->last_q, pos, (size_t)num_joints * sizeof pos[0]);
         p->have_q = 1;
-        if (p->refined) loadid_refined_joint(p->refined, utime, pos);
+        /* REFINED keeps the joint states on the filters' (regularised) clock. */
+        if (p->refined)
+            loadid_refined_joint(p->refined, loadid_signals_newest_joint_time(p->sig), pos);
         flush_pending(p, INT64_MIN, 1);
     }
 }

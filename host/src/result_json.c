@@ -103,6 +103,9 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
         fprintf(out, ", \"complete\": %s", st->complete ? "true" : "false");
         fputs(",\n   \"noise_scale\": ", out);
         number(out, model ? e->noise_scale : NAN);
+        fputs(", \"snr\": ", out);
+        const double none3[3] = {NAN, NAN, NAN};
+        array(out, model ? e->snr : none3, 3);
         fputs(", \"model\": {\"mass\": ", out);
         number(out, e->model_mass);
         fputs(", \"com\": ", out);

@@ -44,6 +44,7 @@ void loadid_setup_signals(const loadid_config_t *cfg, loadid_signal_source_t sou
     out->measured.jerk_psd = out->setpoint.jerk_psd = (loadid_real_t)cfg->kalman_jerk_psd;
     out->measured.meas_sigma = out->setpoint.meas_sigma = (loadid_real_t)cfg->kalman_meas_sigma;
     out->max_joint_age_us = (int64_t)llround(cfg->kalman_max_joint_age_s * 1e6);
+    out->stamp_gain = cfg->kalman_stamp_gain;
     /* The fixed-lag smoother, on both banks so that the instruments and the
      * motion are of the same instant. */
     const int64_t period = llround(cfg->kalman_joint_period_s * 1e6);

@@ -21,7 +21,7 @@ from recordings import damage_count, program, read_truth, run_tool, simulate
 # The contract's keys in its order, then loadid's own.
 KEYS = ["method", "load_name", "samples", "phi", "offset", "mass", "com", "inertia_com",
         "condition_number", "physically_consistent", "phi_std", "identified", "model_phi",
-        "projected", "complete", "noise_scale", "model", "noise"]
+        "projected", "complete", "noise_scale", "snr", "model", "noise"]
 O1 = np.array([1.00, -43.5e-3, 28.5e-3, 22.5e-3, 2.21e-3, 1.22e-3, 0.96e-3, 3.74e-3,
                -0.63e-3, 4.95e-3])
 
@@ -93,7 +93,8 @@ def test_result_has_the_contract_shape_and_rtls_finds_o1(recording, tmp_path):
 
 def assert_consistent(phi):
     """The pseudo-inertia J = [Sigma h; h^T m] is positive semidefinite
-    (Wensing et al. 2017), computed here with numpy."""
+    (Wensing et al. 2017), computed here with numpy; all zero (no load,
+    the model of an estimate without positive mass) is too."""
     m, h = phi[0], np.array(phi[1:4])
     i = phi[4:]
     I = np.array([[i[0], i[1], i[2]], [i[1], i[3], i[4]], [i[2], i[4], i[5]]])
@@ -101,7 +102,7 @@ def assert_consistent(phi):
     J[:3, :3] = 0.5 * np.trace(I) * np.eye(3) - I
     J[:3, 3] = J[3, :3] = h
     J[3, 3] = m
-    assert m > 0 and np.linalg.eigvalsh(J).min() >= -1e-12 * np.abs(J).max(), phi
+    assert m >= 0 and np.linalg.eigvalsh(J).min() >= -1e-12 * np.abs(J).max(), phi
 
 
 def test_refined_beats_the_on_line_methods(recording, tmp_path):
@@ -128,6 +129,49 @@ def test_refined_beats_the_on_line_methods(recording, tmp_path):
     assert eic <= 1.2 * errors["RTLS"][2], errors
     assert_consistent(refined["model_phi"])
     assert refined["identified"] == ["mass", "com", "inertia"]
+
+
+def test_real_data_like_motion_says_what_it_cannot_tell(tmp_path):
+    """Like a slow real robot: a trajectory of 0.1-0.4 Hz at 30 % of its
+    amplitude (|alpha| at most 2 rad/s^2, |omega| at most 0.4 rad/s), no
+    still phase and no ZERO (so the offset is estimated), a drifting F/T
+    bias, 1 m/s^2 of accelerometer bias and 200 us of time-stamp jitter on
+    both streams: the inertia cannot be told, and every method must say so;
+    REFINED still finds mass and COM; no model is physically impossible."""
+    slow = "trajectory:\n  base_frequency: 0.1\n  harmonics: 4\n  max_frequency: 0.4\n"
+    traj_cfg = write_config(tmp_path / "traj.yaml", slow)
+    (tmp_path / "traj").mkdir()
+    subprocess.run([program("LOADID_TRAJ_EXE"), "--config", str(traj_cfg), "--monte-carlo", "300",
+                    "--candidates", "1", "--max-evals", "800", "--quiet",
+                    "--out", str(tmp_path / "traj" / "traj.yaml")], check=True, timeout=300)
+    sim = write_config(tmp_path / "sim.yaml", slow + "simulation:\n  zero: false\n  still_s: 0.3\n"
+                       "  drift: [0.05, -0.04, 0.03, 0.002, -0.002, 0.001]\n"
+                       "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
+                       "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
+                       "  noise:\n    angular: 0.0\n")
+    rec = simulate(tmp_path / "rec", tmp_path / "traj", "--config", sim, "--values",
+                   tmp_path / "values.csv")
+    # The motion is slow: |alpha| over the window, from the (noise-free)
+    # angular channel (seen 1.15 rad/s^2).
+    values = np.loadtxt(tmp_path / "values.csv", delimiter=",", skiprows=1)
+    truth = read_truth(rec)
+    start, end = int(truth["times.start"]), int(truth["times.active_end"])
+    window = (values[:, 0] >= start) & (values[:, 0] < end)
+    assert np.abs(values[window, 11:14]).max() <= 2.0
+    cfg = write_config(tmp_path / "c.yaml", slow + "estimation:\n  offset_model: estimate\n"
+                       "  methods: [RTLS, RIV, RLS, REFINED]\n")
+    result, _ = offline(cfg, rec)
+    phi, _ = truth_phi(rec)
+    m_t, c_t, _ = physical(phi)
+    for r in result:
+        assert "inertia" not in r["identified"], (r["method"], r["identified"], r["snr"])
+        assert_consistent(r["model_phi"])
+    refined = result[3]
+    assert refined["identified"] == ["mass", "com"], refined["identified"]
+    # Seen: mass 1.0 %, COM 1.1 mm, the inertia's signal 0.5 of the torque
+    # noise (the issue's bounds: 5 %, 15 mm).
+    assert abs(refined["model"]["mass"] - m_t) / m_t < 0.05
+    assert np.linalg.norm(np.array(refined["model"]["com"]) - c_t) < 0.015
 
 
 @pytest.mark.parametrize("signals", ["sensor", "kf", "setpoint", "mixed"])

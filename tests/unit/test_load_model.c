@@ -78,7 +78,7 @@ static void test_consistent_load_passes_unchanged(void **state) {
     loadid_model_config_t cfg;
     loadid_model_config_default(&cfg);
     loadid_load_model_t m;
-    assert_int_equal(loadid_load_model(phi, std, &cfg, &m), 0);
+    assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, LOADID_IDENT_MASS | LOADID_IDENT_COM | LOADID_IDENT_INERTIA);
     assert_int_equal(m.projected, 0);
     for (int i = 0; i < 10; ++i) assert_true(fabs(m.phi[i] - phi[i]) <= 1e-15 + 1e-12 * fabs(phi[i]));
@@ -102,7 +102,7 @@ static void test_inconsistent_inertia_is_projected_to_the_nearest(void **state) 
         for (int i = 4; i < 10; ++i) phi[i] += 4e-4 * loadid_rng_normal(&rng);
         small_std(phi, std);
         loadid_load_model_t m;
-        assert_int_equal(loadid_load_model(phi, std, &cfg, &m), 0);
+        assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
         assert_int_equal(m.physical.violations, 0); /* never physically impossible */
         for (int i = 0; i < 4; ++i) assert_true(m.phi[i] == phi[i]); /* mass, COM kept */
         double S[9], Sm[9], l[3];
@@ -144,7 +144,7 @@ static void test_unidentified_inertia_falls_back_to_a_sphere(void **state) {
     loadid_model_config_t cfg;
     loadid_model_config_default(&cfg);
     loadid_load_model_t m;
-    assert_int_equal(loadid_load_model(phi, std, &cfg, &m), 0);
+    assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, LOADID_IDENT_MASS | LOADID_IDENT_COM);
     assert_int_equal(m.projected, 1);
     const double r = cbrt(3 * 2.0 / (4 * 3.14159265358979323846 * 2700.0)), I = 0.4 * 2.0 * r * r;
@@ -167,41 +167,48 @@ static void test_groups_and_bad_input(void **state) {
     loadid_load_model_t m;
     /* COM std 6 mm > 5 mm: neither COM nor inertia. */
     std[1] = 0.006;
-    assert_int_equal(loadid_load_model(phi, std, &cfg, &m), 0);
+    assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, LOADID_IDENT_MASS);
     /* mass std 6 % > 5 %: nothing. */
     small_std(phi, std);
     std[0] = 0.06;
-    assert_int_equal(loadid_load_model(phi, std, &cfg, &m), 0);
+    assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, 0);
     /* NaN std: not identified, never a crash. */
     small_std(phi, std);
     std[7] = NAN;
-    assert_int_equal(loadid_load_model(phi, std, &cfg, &m), 0);
+    assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, LOADID_IDENT_MASS | LOADID_IDENT_COM);
+    /* Too little torque from the inertia (a slow motion): not identified. */
+    const loadid_real_t weak[3] = {100, 50, 0.9}, strong[3] = {100, 50, 1.1};
+    small_std(phi, std);
+    assert_int_equal(loadid_load_model(phi, std, weak, &cfg, &m), 0);
+    assert_int_equal(m.identified, LOADID_IDENT_MASS | LOADID_IDENT_COM);
+    assert_int_equal(loadid_load_model(phi, std, strong, &cfg, &m), 0);
+    assert_int_equal(m.identified, LOADID_IDENT_MASS | LOADID_IDENT_COM | LOADID_IDENT_INERTIA);
     /* An inertia 10 m in gyration radius is no wrist load. */
     small_std(phi, std);
     loadid_real_t huge[10];
     memcpy(huge, phi, sizeof huge);
     huge[4] += 100, huge[7] += 100, huge[9] += 100;
     small_std(huge, std);
-    assert_int_equal(loadid_load_model(huge, std, &cfg, &m), 0);
+    assert_int_equal(loadid_load_model(huge, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, LOADID_IDENT_MASS | LOADID_IDENT_COM);
     /* No positive mass: no load. */
     loadid_real_t neg[10];
     memcpy(neg, phi, sizeof neg);
     neg[0] = -0.2;
-    assert_int_equal(loadid_load_model(neg, std, &cfg, &m), 0);
+    assert_int_equal(loadid_load_model(neg, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, 0);
     assert_int_equal(m.projected, 1);
     for (int i = 0; i < 10; ++i) assert_true(m.phi[i] == 0);
     /* Bad arguments. */
     phi[3] = NAN;
-    assert_int_equal(loadid_load_model(phi, std, &cfg, &m), LOADID_E_NONFINITE);
-    assert_int_equal(loadid_load_model(NULL, std, &cfg, &m), -EINVAL);
+    assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), LOADID_E_NONFINITE);
+    assert_int_equal(loadid_load_model(NULL, std, NULL, &cfg, &m), -EINVAL);
     cfg.com_std = 0;
     phi[3] = 0;
-    assert_int_equal(loadid_load_model(phi, std, &cfg, &m), -EINVAL);
+    assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), -EINVAL);
     assert_string_equal(loadid_ident_name(LOADID_IDENT_INERTIA), "inertia");
 }
 

@@ -214,7 +214,9 @@ static int workload_run(workload_t *w) {
         loadid_model_config_t mc;
         loadid_model_config_default(&mc);
         loadid_load_model_t model;
-        if (loadid_load_model(phi, std, &mc, &model) != 0) ++bad;
+        loadid_real_t snr[3];
+        if (loadid_est_signal_to_noise(w->est[i], phi, snr) != 0) ++bad;
+        if (loadid_load_model(phi, std, snr, &mc, &model) != 0) ++bad;
         const loadid_est_config_t *c = loadid_est_config(w->est[i]);
         loadid_real_t rows[6], cols[LOADID_MAX_PARAMS + 1];
         memcpy(rows, c->row_sigma, sizeof rows);

@@ -184,6 +184,18 @@ int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi,
 int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real_t *phi,
                            loadid_real_t *std, loadid_real_t *scale);
 
+/* How far each group of phi stands out of the noise in this estimator's
+ * data: snr[0] (mass), snr[1] (m c), snr[2] (inertia) are the RMS over the
+ * rows of the wrench that group of phi explains, sqrt(phi_g^T (A_g^T W A_g)
+ * phi_g / rows) with W = D^2, in units of the rows' noise (rows: 6 per
+ * sample; 3, the torque rows, for the inertia). A slow, mostly
+ * translational motion leaves snr[2] near or below 1: whatever the
+ * statistics say, a drift or a model error of the noise's size then sets
+ * the inertia. phi: n_params values. Returns 0, -EINVAL,
+ * LOADID_E_NONFINITE or LOADID_E_NOT_EXCITED (no samples). */
+int loadid_est_signal_to_noise(const loadid_est_t *est, const loadid_real_t *phi,
+                               loadid_real_t snr[3]);
+
 /* The configuration the estimator was created with. */
 const loadid_est_config_t *loadid_est_config(const loadid_est_t *est);
 

@@ -10,10 +10,13 @@
  *   INERTIA  COM, the largest std of the six I_S elements within
  *            inertia_rel_std of the inertia's scale (the mean principal
  *            moment about the COM, at least that of a sphere of the
- *            fallback density), and a radius of gyration
- *            sqrt(tr(I_C) / 2m) within max_gyration
- * A slow, mostly translational motion leaves the inertia columns of eq. (6)
- * small, their std large, and so INERTIA unset.
+ *            fallback density), a radius of gyration sqrt(tr(I_C) / 2m)
+ *            within max_gyration, and the torque the inertia explains at
+ *            least min_snr times the torque rows' noise (snr[2], from
+ *            loadid_est_signal_to_noise): a slow, mostly translational
+ *            motion gives the inertia too little torque to stand out of a
+ *            drift or a model error of the noise's size, whatever its
+ *            statistical std says.
  *
  * The model phi:
  *   - mass and COM as estimated (an unidentified one is kept, and flagged;
@@ -50,6 +53,7 @@ typedef struct {
     loadid_real_t com_std;          /* [m], default 0.005 */
     loadid_real_t inertia_rel_std;  /* [-], default 0.3 */
     loadid_real_t max_gyration;     /* [m], default 0.5 */
+    loadid_real_t min_snr;          /* [-], default 1 */
     loadid_real_t fallback_density; /* [kg/m^3], default 2700 (aluminium) */
 } loadid_model_config_t;
 
@@ -63,11 +67,14 @@ typedef struct {
 void loadid_model_config_default(loadid_model_config_t *cfg);
 
 /* estimate: a method's phi (load only); std: its standard deviations
- * (+Inf allowed: that group is then not identified). Returns 0, -EINVAL
- * (NULL, or a config value not finite and > 0) or LOADID_E_NONFINITE
- * (estimate not finite). No allocation, no system call. */
+ * (+Inf allowed: that group is then not identified); snr: the groups'
+ * signal-to-noise ratios (loadid_est_signal_to_noise), or NULL to skip
+ * that test. Returns 0, -EINVAL (NULL, or a config value not finite and
+ * > 0) or LOADID_E_NONFINITE (estimate not finite). No allocation, no
+ * system call. */
 int loadid_load_model(const loadid_real_t estimate[10], const loadid_real_t std[10],
-                      const loadid_model_config_t *cfg, loadid_load_model_t *out);
+                      const loadid_real_t *snr, const loadid_model_config_t *cfg,
+                      loadid_load_model_t *out);
 
 /* The names of the identified bits, "mass", "com", "inertia". */
 const char *loadid_ident_name(int bit);

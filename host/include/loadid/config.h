@@ -157,6 +157,10 @@ typedef struct {
                                            on zero-lag joint signals; 0 = the
                                            causal filter; default 0.05, at most
                                            kalman.joint_period_s * 200 */
+    double kalman_stamp_gain;           /* kalman.stamp_gain: the joint stamps'
+                                           phase-locked loop (loadid/signals.h),
+                                           (0, 1], 1 = stamps as they are;
+                                           default 0.005 */
     double kalman_joint_period_s;       /* kalman.joint_period_s: the joint
                                            stream's period [s], for the smoother's
                                            steady gains; default 0.001 */
@@ -176,6 +180,8 @@ typedef struct {
     double model_inertia_rel_std;       /* [-], default 0.3 */
     double model_max_gyration;          /* [m], default 0.5 */
     double model_fallback_density;      /* [kg/m^3], default 2700 */
+    double model_min_snr;               /* [-], default 1: the inertia's torque
+                                           over the torque noise, at least */
 
     /* trajectory: (loadid) the excitation designer, loadid-traj */
     double traj_base_frequency;         /* f of eq. (10) [Hz], default 0.5 */

@@ -76,6 +76,8 @@ typedef struct {
     int identified;               /* LOADID_IDENT_* bits (load_model.h) */
     int projected;                /* model_phi differs from phi */
     double model_phi[10];         /* physically consistent (load_model.h) */
+    double snr[3];                /* mass, m c, inertia: how far each stands out
+                                     of the noise (loadid_est_signal_to_noise) */
     double model_mass, model_com[3], model_inertia_com[6];
 } loadid_pipeline_estimate_t;
 
