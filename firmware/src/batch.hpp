@@ -99,6 +99,15 @@ public:
         return 0;
     }
 
+    int weakest(Real *dir, Real *ratio) const override {
+        CovInput in{};
+        in.n = N;
+        in.gram = excitation_.gram().data();
+        in.t = excitation_.col_weight().data();
+        in.samples = samples_;
+        return weakest_direction(in, dir, ratio);
+    }
+
     int signal_to_noise(const Real *phi, Real snr[3]) const override {
         CovInput in{};
         in.n = N;

@@ -7,7 +7,7 @@ extern "C" const char *loadid_strerror(int code) {
     switch (code) {
         case 0: return "success";
         case LOADID_E_NONFINITE: return "input holds NaN or Inf (rejected, state unchanged)";
-        case LOADID_E_NOT_EXCITED: return "not excited: too few samples or rank-deficient data";
+        case LOADID_E_NOT_EXCITED: return "not excited: the data do not determine every parameter";
         case LOADID_E_NO_SOLUTION: return "no TLS solution: last component of the TLS vector is zero";
         case LOADID_E_FULL: return "batch estimator full: raise batch_capacity";
         case LOADID_E_STALE: return "joint data stale: no joint state close enough to the sample time";

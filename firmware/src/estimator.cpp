@@ -186,6 +186,12 @@ extern "C" int loadid_est_signal_to_noise(const loadid_est_t *est, const loadid_
     return est->signal_to_noise(phi, snr);
 }
 
+extern "C" int loadid_est_weakest_direction(const loadid_est_t *est, loadid_real_t *dir,
+                                            loadid_real_t *ratio) {
+    if (!est || !dir) return -EINVAL;
+    return est->weakest(dir, ratio);
+}
+
 extern "C" const loadid_est_config_t *loadid_est_config(const loadid_est_t *est) {
     return est ? &est->cfg : nullptr;
 }

@@ -25,6 +25,8 @@ struct loadid_est {
     virtual int uncertainty(const loadid_real_t *phi, loadid_real_t *std, loadid_real_t *scale) const = 0;
     // loadid_est_signal_to_noise (uncertainty.hpp's group_snr).
     virtual int signal_to_noise(const loadid_real_t *phi, loadid_real_t snr[3]) const = 0;
+    // loadid_est_weakest_direction (uncertainty.hpp's weakest_direction).
+    virtual int weakest(loadid_real_t *dir, loadid_real_t *ratio) const = 0;
 
     loadid_est_config_t cfg;  // changed only by loadid_est_set_weights
 };

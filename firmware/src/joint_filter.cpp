@@ -27,6 +27,7 @@ using Real = loadid_real_t;
 namespace {
 
 constexpr int kMaxJoints = 16;
+constexpr int kRing = 2 * LOADID_JF_MAX_LAG + 1;  // fixed-lag history, updates
 constexpr size_t kWorkPerSample = 9;  // smoother: x (3) and the upper triangle of P (6)
 
 // Mean and covariance of one joint's x = [q, qd, qdd].
@@ -148,8 +149,9 @@ Gauss load(const Real *w) {
 
 // The fixed-lag smoother's history: per update its time, the piece of the
 // series it belongs to (a restart after a gap begins a new one), each
-// joint's predicted state x(k|k-1) and innovation nu(k), in a ring of
-// lag + 1.
+// joint's predicted state x(k|k-1) and innovation nu(k), in a ring of the
+// last kRing updates: lag + 1 are needed, the rest serves sensor samples
+// that arrive late (a CAN bus behind the joint stream).
 struct LagEntry {
     int64_t t;
     int piece;
@@ -163,9 +165,9 @@ struct loadid_jf {
     int64_t last;  // INT64_MIN: no measurement since create or reset
     Gauss joint[kMaxJoints];
     // Fixed-lag smoothing (cfg.lag_steps > 0): gains B_i, i = 0..lag, and
-    // the ring of the last lag + 1 updates since the filters (re)started.
+    // the ring of the last kRing updates.
     Real gain[LOADID_JF_MAX_LAG + 1][3];
-    LagEntry ring[LOADID_JF_MAX_LAG + 1];
+    LagEntry ring[kRing];
     int ring_head, ring_count;  // the oldest entry, and how many
     int piece;                  // the current piece of the series
     int64_t piece_start;        // the time of its first update (no entry)
@@ -226,16 +228,28 @@ extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real
         for (int i = 0; i < jf->n; ++i) initialise(jf->joint[i], q[i], jf->cfg);
         // The smoother restarts with the filter; the last piece's updates
         // stay (smoothed with what came after them in it) until pushed out.
+        // The first update is an entry too (its state, no innovation), so
+        // a sample just after it is served from it, as the filter would.
         ++jf->piece;
         jf->piece_start = t_us;
+        if (lag > 0) {
+            if (jf->ring_count == kRing) jf->ring_head = (jf->ring_head + 1) % kRing;
+            else ++jf->ring_count;
+            LagEntry *e = &jf->ring[(jf->ring_head + jf->ring_count - 1) % kRing];
+            e->t = t_us;
+            e->piece = jf->piece;
+            for (int i = 0; i < jf->n; ++i) {
+                for (int c = 0; c < 3; ++c) e->xpred[i][c] = jf->joint[i].x[c];
+                e->nu[i] = 0;
+            }
+        }
     } else {
         const Real dt = seconds(jf->last, t_us);
         LagEntry *e = nullptr;
-        if (lag > 0) {  // the ring keeps lag + 1 updates
-            const int size = lag + 1;
-            if (jf->ring_count == size) jf->ring_head = (jf->ring_head + 1) % size;
+        if (lag > 0) {  // the ring keeps the last kRing updates
+            if (jf->ring_count == kRing) jf->ring_head = (jf->ring_head + 1) % kRing;
             else ++jf->ring_count;
-            e = &jf->ring[(jf->ring_head + jf->ring_count - 1) % size];
+            e = &jf->ring[(jf->ring_head + jf->ring_count - 1) % kRing];
             e->t = t_us;
             e->piece = jf->piece;
         }
@@ -271,7 +285,15 @@ extern "C" int64_t loadid_jf_last_time(const loadid_jf_t *jf) { return jf ? jf->
 
 // The entry that is index k of the ring, oldest first.
 static const LagEntry &ring_at(const loadid_jf_t *jf, int k) {
-    return jf->ring[(jf->ring_head + k) % (jf->cfg.lag_steps + 1)];
+    return jf->ring[(jf->ring_head + k) % kRing];
+}
+
+extern "C" int loadid_jf_end_piece(loadid_jf_t *jf) {
+    if (!jf) return -EINVAL;
+    if (jf->last == INT64_MIN) return 0;
+    ++jf->piece;
+    jf->piece_start = jf->last + 1;  // what came before is served now
+    return 0;
 }
 
 // Entries of the current piece at the ring's end.
@@ -286,8 +308,9 @@ extern "C" int64_t loadid_jf_lagged_time(const loadid_jf_t *jf) {
     const int lag = jf->cfg.lag_steps, cur = current_entries(jf);
     // The current piece: up to the first update without lag_steps after it.
     if (cur > lag) return ring_at(jf, jf->ring_count - lag).t - 1;
-    // Else what an earlier piece left: up to this piece's start.
-    if (cur < jf->ring_count) return jf->piece_start - 1;
+    // Else what an earlier piece left: up to its newest update (a sample
+    // after that waits for this piece's first update to be smoothed).
+    if (cur < jf->ring_count) return ring_at(jf, jf->ring_count - cur - 1).t;
     return INT64_MIN;
 }
 
@@ -299,9 +322,21 @@ extern "C" int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, in
     if (!jf || jf->cfg.lag_steps <= 0) return -EINVAL;
     const int lag = jf->cfg.lag_steps;
     if (jf->ring_count == 0) return LOADID_E_NO_DATA;
-    int j = jf->ring_count - 1;
-    while (j >= 0 && ring_at(jf, j).t > t_us) --j;
-    if (j < 0) return LOADID_E_STALE;  // before every kept update
+    // Before every kept update: served from the first, when close to it.
+    if (ring_at(jf, 0).t > t_us && distance_us(t_us, ring_at(jf, 0).t) > uint64_t(max_age_us))
+        return LOADID_E_STALE;
+    int lo = 0, hi = jf->ring_count - 1;  // the newest update at or before t: binary search
+    while (lo < hi) {
+        const int mid = (lo + hi + 1) / 2;
+        if (ring_at(jf, mid).t <= t_us) lo = mid;
+        else hi = mid - 1;
+    }
+    int j = lo;
+    // Too far after it, but the next update (a piece that began after a
+    // gap) is close: that one serves it, back in time, as the filter would.
+    if (distance_us(ring_at(jf, j).t, t_us) > uint64_t(max_age_us) && j + 1 < jf->ring_count &&
+        distance_us(t_us, ring_at(jf, j + 1).t) <= uint64_t(max_age_us))
+        ++j;
     const LagEntry &e0 = ring_at(jf, j);
     int after = 0;  // updates after it in its piece
     while (j + after + 1 < jf->ring_count && after < lag &&

@@ -24,6 +24,7 @@ struct loadid_signals {
     // period, the last raw stamp (INT64_MIN: none yet).
     double pll_t, pll_period;
     int64_t pll_last_raw;
+    bool piece_ended;  // loadid_signals_end_piece since the last joint state
 };
 
 namespace {
@@ -206,6 +207,7 @@ extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int
     }
     regularise(s, raw, true);
     ++s->stats.joint_msgs_ok;
+    s->piece_ended = false;
     return 0;
 }
 
@@ -283,4 +285,13 @@ extern "C" int64_t loadid_signals_last_joint_time(const loadid_signals_t *s) {
 
 extern "C" int64_t loadid_signals_newest_joint_time(const loadid_signals_t *s) {
     return s ? loadid_jf_last_time(s->measured) : INT64_MIN;
+}
+
+extern "C" int loadid_signals_end_piece(loadid_signals_t *s) {
+    if (!s) return -EINVAL;
+    if (s->piece_ended) return 0;
+    loadid_jf_end_piece(s->measured);
+    loadid_jf_end_piece(s->setpoint);
+    s->piece_ended = true;
+    return 0;
 }

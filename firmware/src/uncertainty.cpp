@@ -98,6 +98,24 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
     return 0;
 }
 
+int weakest_direction(const CovInput &in, Real *dir, Real *ratio) {
+    const int n = in.n, n1 = n + 1;
+    if (in.samples <= 0) return LOADID_E_NOT_EXCITED;
+    const Md gs = symmetric(in.gram, n1);
+    Eigen::SelfAdjointEigenSolver<Md> es(gs.topLeftCorner(n, n));
+    const Vd l = es.eigenvalues();
+    // In the scaled coordinates x = T^-1 phi: phi = T x.
+    Vd v(n);
+    double big = 0;
+    for (int j = 0; j < n; ++j) {
+        v(j) = es.eigenvectors()(j, 0) * static_cast<double>(in.t[j]);
+        big = std::max(big, std::abs(v(j)));
+    }
+    for (int j = 0; j < n; ++j) dir[j] = static_cast<Real>(big > 0 ? v(j) / big : 0);
+    if (ratio) *ratio = static_cast<Real>(l(n - 1) > 0 ? std::sqrt(std::max(l(0), 0.0) / l(n - 1)) : 0);
+    return 0;
+}
+
 int group_snr(const CovInput &in, Real snr[3]) {
     const int n = in.n, n1 = n + 1;
     snr[0] = snr[1] = snr[2] = 0;

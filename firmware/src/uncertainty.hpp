@@ -48,4 +48,7 @@ int covariance_std(const CovInput &in, Real *std, Real *scale);
 // in.t, in.samples, in.phi; the rest unused).
 int group_snr(const CovInput &in, Real snr[3]);
 
+// loadid_est_weakest_direction (in.gram, in.t, in.samples).
+int weakest_direction(const CovInput &in, Real *dir, Real *ratio);
+
 }  // namespace loadid

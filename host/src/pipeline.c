@@ -187,6 +187,42 @@ void loadid_pipeline_destroy(loadid_pipeline_t *p) {
 
 /* ------------------------------------------------------------ estimates */
 
+/* Why method m has no estimate, in words: for "not excited", which of the
+ * gate's tests failed and which parameters the data determine worst. */
+static void explain(loadid_pipeline_t *p, int m, int rc, const loadid_est_info_t *info, char *out,
+                    size_t len) {
+    if (rc != LOADID_E_NOT_EXCITED) {
+        snprintf(out, len, "%s", loadid_strerror(rc));
+        return;
+    }
+    const loadid_est_config_t *c = loadid_est_config(p->est[m]);
+    loadid_real_t dir[16];
+    const char *group = "?";
+    if (loadid_est_weakest_direction(p->est[m], dir, NULL) == 0) {
+        static const char *const names[] = {"the mass", "the centre of mass", "the inertia",
+                                            "the offset"};
+        double share[4] = {0, 0, 0, 0};
+        for (int j = 0; j < p->n_params; ++j)
+            share[j == 0 ? 0 : j < 4 ? 1 : j < 10 ? 2 : 3] += (double)(dir[j] * dir[j]);
+        int best = 0;
+        for (int g = 1; g < 4; ++g)
+            if (share[g] > share[best]) best = g;
+        group = names[best];
+    }
+    const int64_t k = info->samples;
+    if (k * 6 < p->n_params + 1)
+        snprintf(out, len, "not excited: %lld samples, too few for %d parameters", (long long)k,
+                 p->n_params);
+    else if (!(info->condition_number <= c->max_condition))
+        snprintf(out, len, "not excited: the motion does not determine %s (condition number %.3g "
+                           "over %.3g, %lld samples)", group, (double)info->condition_number,
+                 (double)c->max_condition, (long long)k);
+    else
+        snprintf(out, len, "not excited: no direction of phi stands out of the noise; weakest "
+                           "is %s (noise ratio %.3g, condition number %.3g, %lld samples)",
+                 group, (double)info->noise_ratio, (double)info->condition_number, (long long)k);
+}
+
 /* The final estimate's uncertainty and load model (load_model_t). */
 static void model_of(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
                      const loadid_real_t load[10], loadid_pipeline_estimate_t *e) {
@@ -228,7 +264,10 @@ static void estimate_of(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t 
     e->sigma_min = (double)info.sigma_min;
     e->valid = rc == 0;
     e->error = rc;
-    if (!e->valid) return;
+    if (!e->valid) {
+        if (final) explain(p, m, rc, &info, e->why, sizeof e->why);
+        return;
+    }
     loadid_real_t load[10];
     loadid_phi_subtract(phi, p->distal, load);
     loadid_physical_t ph;
@@ -358,11 +397,18 @@ static void advance(loadid_pipeline_t *p, int64_t utime) {
 #define TICK_GRACE_US 50000
 void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us) {
     const int64_t grace = TICK_GRACE_US + llround(p->cfg.kalman_lag_s * 1e6);
+    /* Joint states stopped coming: the smoother serves what it has. */
+    const int64_t newest = loadid_signals_newest_joint_time(p->sig);
+    if (newest != INT64_MIN && newest < now_us - TICK_GRACE_US) {
+        loadid_signals_end_piece(p->sig);
+        flush_pending(p, INT64_MIN, 1);
+    }
     flush_pending(p, now_us - grace, 0); /* joints stopped: serve (or refuse) them */
     advance(p, now_us - grace);
 }
 
 void loadid_pipeline_finish(loadid_pipeline_t *p, int64_t now_us) {
+    loadid_signals_end_piece(p->sig); /* nothing more comes: serve what there is */
     flush_pending(p, INT64_MAX, 0);
     advance(p, now_us);
     if (p->state == LOADID_STATE_ZEROING) finish_zeroing(p, now_us);

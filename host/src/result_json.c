@@ -132,7 +132,7 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
         }
         if (!e->valid) {
             fputs(", \"error\": ", out);
-            string(out, loadid_strerror(e->error));
+            string(out, e->why[0] ? e->why : loadid_strerror(e->error));
         }
         fprintf(out, "}%s\n", i + 1 < n ? "," : "");
     }

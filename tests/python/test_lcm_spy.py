@@ -59,7 +59,7 @@ def test_lcm_spy_decodes_estimate_t(tmp_path):
     # A spy that exited early (a headless Java: HeadlessException) makes
     # the final kill fail; its own output says why.
     assert r.returncode == 0, r.stderr + "\nlcm-spy's output:\n" + spy_out
-    assert "Found 5 LCM types" in spy_out, spy_out
+    assert "Found 6 LCM types" in spy_out, spy_out
     shot = out / "lcm-spy.png"
     assert shot.stat().st_size > 1000
     # The screenshot is an image of the screen's size (identify, ImageMagick).

@@ -174,6 +174,21 @@ def test_real_data_like_motion_says_what_it_cannot_tell(tmp_path):
     assert np.linalg.norm(np.array(refined["model"]["com"]) - c_t) < 0.015
 
 
+def test_not_excited_says_what_is_missing(trajectory, tmp_path):
+    """A robot that hardly moves, with the noisy accelerometer as the
+    source: the refusal names the failed test, the weakest parameters and
+    the sample count, not "too few samples"."""
+    sim = write_config(tmp_path / "sim.yaml", "simulation:\n  trajectory_scale: 0.001\n")
+    rec = simulate(tmp_path / "rec", trajectory, "--config", sim)
+    cfg = write_config(tmp_path / "c.yaml", "estimation:\n  methods: [RTLS, RLS]\n"
+                       "  signals: sensor\n")
+    result, _ = offline(cfg, rec)
+    for r in result:
+        assert r["identified"] == [] and r["error"].startswith("not excited: "), r["error"]
+        assert "1500 samples" in r["error"] and "too few" not in r["error"]
+        assert "stands out of the noise" in r["error"] or "does not determine" in r["error"]
+
+
 @pytest.mark.parametrize("signals", ["sensor", "kf", "setpoint", "mixed"])
 def test_every_signal_source_estimates(recording, tmp_path, signals):
     cfg = write_config(tmp_path / "c.yaml", f"estimation:\n  signals: {signals}\n"

@@ -49,6 +49,10 @@ zeroing:
   window_s: 30.0                # ended by `loadid start`
 kalman:
   max_joint_age_s: 5.0          # a still robot: no sample may be refused as stale
+  lag_s: 0.0                    # the causal filter: the parts come with seconds between
+                                # them, each restarting the joint stream, and under TCG
+                                # one sample at a restart was refused by the fixed-lag
+                                # smoother (counted as stale); live_lcm tests the smoother live
 """
 
 

@@ -196,6 +196,16 @@ int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real_t *phi,
 int loadid_est_signal_to_noise(const loadid_est_t *est, const loadid_real_t *phi,
                                loadid_real_t snr[3]);
 
+/* The direction of phi the data determine worst: the eigenvector of the
+ * smallest eigenvalue of the column-weighted information matrix
+ * (D A T)^T (D A T), mapped back to phi's units and normalised by the
+ * largest component; with the eigenvalue ratio it says which parameters a
+ * "not excited" refusal lacks. dir: n_params values; *ratio (may be NULL):
+ * sqrt(lambda_min / lambda_max). Returns 0, -EINVAL or
+ * LOADID_E_NOT_EXCITED (no samples). */
+int loadid_est_weakest_direction(const loadid_est_t *est, loadid_real_t *dir,
+                                 loadid_real_t *ratio);
+
 /* The configuration the estimator was created with. */
 const loadid_est_config_t *loadid_est_config(const loadid_est_t *est);
 

@@ -100,14 +100,20 @@ int64_t loadid_jf_last_time(const loadid_jf_t *jf);
 
 /* With lag_steps > 0: the newest time the fixed-lag smoother can serve
  * now: 1 us before the first update of the current piece of the series
- * that has fewer than lag_steps updates after it, or, while the current
- * piece (since a restart after a gap) has no such update yet, 1 us before
- * its start (what the piece before it left is served with the updates it
- * had); INT64_MIN when there is nothing. */
+ * that has fewer than lag_steps updates after it; while the current piece
+ * (since a restart after a gap, or loadid_jf_end_piece) has none with so
+ * many, the newest update of the piece before it (served with the updates
+ * it had); INT64_MIN when there is nothing. */
 int64_t loadid_jf_lagged_time(const loadid_jf_t *jf);
 
+/* The joint stream has stopped (no update is coming for a while): the
+ * updates kept are served from now on with those after them that exist,
+ * as at a gap; the filter itself goes on unchanged. Returns 0 or -EINVAL. */
+int loadid_jf_end_piece(loadid_jf_t *jf);
+
 /* With lag_steps > 0: the smoothed state at t_us, from the newest kept
- * update at or before t_us (the last lag_steps + 1 are kept), with the
+ * update at or before t_us (the last 2 LOADID_JF_MAX_LAG + 1 are kept, so a
+ * sensor sample that arrives late is still served), with the
  * lag_steps updates after it, or, in a piece that ended at a gap, with
  * those it had; propagated by the model to t_us. Returns 0; -EINVAL (NULL
  * jf, or lag_steps 0); LOADID_E_NO_DATA (nothing yet, or that update has

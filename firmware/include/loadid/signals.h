@@ -147,6 +147,12 @@ int loadid_signals_stats(const loadid_signals_t *s,
  * filter's lag_steps > 0): the newest time it can serve now. */
 int64_t loadid_signals_last_joint_time(const loadid_signals_t *s);
 
+/* The joint stream has stalled: with the fixed-lag smoother, serve what
+ * was received with the joint states that came after it
+ * (loadid_jf_end_piece on both filters), once until the next joint state.
+ * Returns 0 or -EINVAL. */
+int loadid_signals_end_piece(loadid_signals_t *s);
+
 /* The (regularised, stamp_gain) time of the newest accepted joint state
  * [us]; INT64_MIN before the first. */
 int64_t loadid_signals_newest_joint_time(const loadid_signals_t *s);

@@ -67,6 +67,7 @@ typedef struct {
     int physically_consistent;
     int valid;                    /* 0: no estimate yet (error says why) */
     int error;                    /* the core's code when !valid */
+    char why[160];                /* when !valid: what is missing, in words */
     /* Filled in the final estimate (DONE) only, load_model_t's fields: */
     int has_model;                /* 1 when the fields below are set */
     double phi_std[10];           /* one standard deviation of each element
