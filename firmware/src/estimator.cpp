@@ -174,7 +174,7 @@ extern "C" int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real
     if (!est || !phi || !std) return -EINVAL;
     if (!all_finite(phi, est->cfg.n_params)) return LOADID_E_NONFINITE;
     loadid_real_t s;
-    const int rc = est->uncertainty(phi, std, &s);
+    const int rc = covariance_std(est->information(phi), std, &s);
     if (scale) *scale = s;
     return rc;
 }
@@ -183,13 +183,13 @@ extern "C" int loadid_est_signal_to_noise(const loadid_est_t *est, const loadid_
                                           loadid_real_t snr[3]) {
     if (!est || !phi || !snr) return -EINVAL;
     if (!all_finite(phi, est->cfg.n_params)) return LOADID_E_NONFINITE;
-    return est->signal_to_noise(phi, snr);
+    return group_snr(est->information(phi), snr);
 }
 
 extern "C" int loadid_est_weakest_direction(const loadid_est_t *est, loadid_real_t *dir,
                                             loadid_real_t *ratio) {
     if (!est || !dir) return -EINVAL;
-    return est->weakest(dir, ratio);
+    return weakest_direction(est->information(nullptr), dir, ratio);
 }
 
 extern "C" const loadid_est_config_t *loadid_est_config(const loadid_est_t *est) {

@@ -5,6 +5,7 @@
 
 #include "eigen_types.hpp"
 #include "loadid/estimator.h"
+#include "uncertainty.hpp"
 
 struct loadid_est {
     explicit loadid_est(const loadid_est_config_t &config) : cfg(config) {}
@@ -20,13 +21,11 @@ struct loadid_est {
     // an implementation returns 0 or LOADID_E_FULL without changing state.
     virtual int update(const loadid_real_t *A, const loadid_real_t *C, const loadid_real_t *y) = 0;
     virtual int estimate(loadid_real_t *phi, loadid_est_info_t *info) const = 0;
-    // One standard deviation of each element of phi (this method's estimate)
-    // and the a-posteriori noise scale (uncertainty.hpp).
-    virtual int uncertainty(const loadid_real_t *phi, loadid_real_t *std, loadid_real_t *scale) const = 0;
-    // loadid_est_signal_to_noise (uncertainty.hpp's group_snr).
-    virtual int signal_to_noise(const loadid_real_t *phi, loadid_real_t snr[3]) const = 0;
-    // loadid_est_weakest_direction (uncertainty.hpp's weakest_direction).
-    virtual int weakest(loadid_real_t *dir, loadid_real_t *ratio) const = 0;
+    // The information matrix the excitation gate keeps, and this method's
+    // kind of covariance, for phi (may be NULL): uncertainty.hpp computes
+    // phi_std, the groups' signal-to-noise and the weakest direction from
+    // it (loadid_est_uncertainty and its neighbours in estimator.cpp).
+    virtual loadid::CovInput information(const loadid_real_t *phi) const = 0;
 
     loadid_est_config_t cfg;  // changed only by loadid_est_set_weights
 };

@@ -18,7 +18,6 @@
 
 #include "estimator_base.hpp"
 #include "excitation.hpp"
-#include "uncertainty.hpp"
 
 namespace loadid {
 
@@ -74,30 +73,10 @@ public:
         return 0;
     }
 
-    int weakest(Real *dir, Real *ratio) const override {
-        CovInput in{};
-        in.n = N;
-        in.gram = excitation_.gram().data();
-        in.t = excitation_.col_weight().data();
-        in.samples = samples_;
-        return weakest_direction(in, dir, ratio);
-    }
-
-    int signal_to_noise(const Real *phi, Real snr[3]) const override {
-        CovInput in{};
-        in.n = N;
-        in.gram = excitation_.gram().data();
-        in.t = excitation_.col_weight().data();
-        in.samples = samples_;
-        in.phi = phi;
-        return group_snr(in, snr);
-    }
-
-    int uncertainty(const Real *phi, Real *std, Real *scale) const override {
-        const CovInput in{instrumental_ ? CovKind::IV : CovKind::LS, N, excitation_.gram().data(), excitation_.gram_torque().data(),
-                          excitation_.col_weight().data(), samples_, phi,
-                          instrumental_ ? M_.data() : nullptr, instrumental_ ? CC_.data() : nullptr};
-        return covariance_std(in, std, scale);
+    CovInput information(const Real *phi) const override {
+        return {instrumental_ ? CovKind::IV : CovKind::LS, N, excitation_.gram().data(),
+                excitation_.gram_torque().data(), excitation_.col_weight().data(), samples_, phi,
+                instrumental_ ? M_.data() : nullptr, instrumental_ ? CC_.data() : nullptr};
     }
 
 private:

@@ -24,7 +24,6 @@
 #include "excitation.hpp"
 #include "linalg.hpp"
 #include "tls_solution.hpp"
-#include "uncertainty.hpp"
 
 namespace loadid {
 
@@ -113,29 +112,9 @@ public:
         return 0;
     }
 
-    int weakest(Real *dir, Real *ratio) const override {
-        CovInput in{};
-        in.n = N;
-        in.gram = excitation_.gram().data();
-        in.t = excitation_.col_weight().data();
-        in.samples = samples_;
-        return weakest_direction(in, dir, ratio);
-    }
-
-    int signal_to_noise(const Real *phi, Real snr[3]) const override {
-        CovInput in{};
-        in.n = N;
-        in.gram = excitation_.gram().data();
-        in.t = excitation_.col_weight().data();
-        in.samples = samples_;
-        in.phi = phi;
-        return group_snr(in, snr);
-    }
-
-    int uncertainty(const Real *phi, Real *std, Real *scale) const override {
-        const CovInput in{CovKind::TLS, N, excitation_.gram().data(), excitation_.gram_torque().data(), t_.data(), samples_, phi,
-                          nullptr, nullptr};
-        return covariance_std(in, std, scale);
+    CovInput information(const Real *phi) const override {
+        return {CovKind::TLS, N, excitation_.gram().data(), excitation_.gram_torque().data(),
+                t_.data(), samples_, phi, nullptr, nullptr};
     }
 
 private:

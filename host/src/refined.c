@@ -200,6 +200,18 @@ static int64_t feed(const loadid_refined_t *r, int n_params, const loadid_real_t
     return fed;
 }
 
+/* Swaps the working stores (kinematics, smoothed joints) with the best
+ * trial's. */
+static void swap_best(loadid_refined_t *r) {
+    loadid_real_t *t = r->kin_store;
+    r->kin_store = r->best_kin, r->best_kin = t;
+    unsigned char *o = r->kin_ok;
+    r->kin_ok = r->best_ok, r->best_ok = o;
+    loadid_real_t *sj[3] = {r->qs, r->qds, r->qdds};
+    r->qs = r->best_q[0], r->qds = r->best_q[1], r->qdds = r->best_q[2];
+    r->best_q[0] = sj[0], r->best_q[1] = sj[1], r->best_q[2] = sj[2];
+}
+
 /* Solves the n x n symmetric positive definite M x = b in place (Cholesky,
  * row-major, double); 0, or -1 when M is not positive definite. */
 static int spd_solve(double *M, double *b, int n) {
@@ -324,26 +336,11 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
                                         NULL);
         if (!(rss < best)) continue;
         best = rss, best_psd = (double)jf.jerk_psd, used = n, best_count = r->count;
-        /* Keep this trial's kinematics and smoothed joints: swap the stores. */
-        loadid_real_t *t = r->kin_store;
-        r->kin_store = r->best_kin, r->best_kin = t;
-        unsigned char *o = r->kin_ok;
-        r->kin_ok = r->best_ok, r->best_ok = o;
-        loadid_real_t *sj[3] = {r->qs, r->qds, r->qdds};
-        r->qs = r->best_q[0], r->qds = r->best_q[1], r->qdds = r->best_q[2];
-        r->best_q[0] = sj[0], r->best_q[1] = sj[1], r->best_q[2] = sj[2];
+        swap_best(r); /* keep this trial's kinematics and smoothed joints */
     }
     if (used < 2) return LOADID_E_NO_DATA;
-    { /* the best back in place */
-        loadid_real_t *t = r->kin_store;
-        r->kin_store = r->best_kin, r->best_kin = t;
-        unsigned char *o = r->kin_ok;
-        r->kin_ok = r->best_ok, r->best_ok = o;
-        loadid_real_t *sj[3] = {r->qs, r->qds, r->qdds};
-        r->qs = r->best_q[0], r->qds = r->best_q[1], r->qdds = r->best_q[2];
-        r->best_q[0] = sj[0], r->best_q[1] = sj[1], r->best_q[2] = sj[2];
-        r->count = best_count;
-    }
+    swap_best(r); /* the best back in place */
+    r->count = best_count;
     jf.jerk_psd = (loadid_real_t)best_psd;
     rep->jerk_psd = best_psd;
     double smooth_sigma[3];
