@@ -148,7 +148,8 @@ typedef struct {
                                            not a noise: always as configured) */
 
     /* kalman: (loadid) the joint filters (loadid/joint_filter.h) */
-    double kalman_jerk_psd;             /* default: loadid_jf_config_default */
+    double kalman_jerk_psd;             /* default 10 (behind the fixed-lag smoother;
+                                           1e3 for the causal filter, lag_s 0) */
     double kalman_meas_sigma;           /* default: loadid_jf_config_default */
     double kalman_max_joint_age_s;      /* default 0.005 */
     double kalman_lag_s;                /* kalman.lag_s: the on-line fixed-lag
