@@ -174,6 +174,31 @@ def test_real_data_like_motion_says_what_it_cannot_tell(tmp_path):
     assert np.linalg.norm(np.array(refined["model"]["com"]) - c_t) < 0.015
 
 
+def test_channel_prefix_reads_its_own_channels(recording, tmp_path):
+    """lcm.channel_prefix: a recording of robot R2 (R2_LOADID_JOINTS,
+    R2_LOADID_COMMAND) is estimated with the prefix and, without it, has no
+    START (its channels are someone else's)."""
+    import lcm
+    rec = tmp_path / "r2"
+    rec.mkdir()
+    shutil.copy(recording / "can.log", rec / "can.log")
+    src = lcm.EventLog(str(recording / "lcm.log"), "r")
+    dst = lcm.EventLog(str(rec / "lcm.log"), "w", overwrite=True)
+    for ev in src:
+        dst.write_event(ev.timestamp, "R2_" + ev.channel, ev.data)
+    dst.close()
+    plain = write_config(tmp_path / "plain.yaml")
+    r = offline(plain, rec, check=False)
+    assert r.returncode == 1 and "no START" in r.stderr
+    cfg = write_config(tmp_path / "r2.yaml", "lcm:\n  channel_prefix: R2_\n")
+    result, _ = offline(cfg, rec)
+    expected, _ = offline(plain, recording)
+    assert result == expected  # the same estimates, bit for bit
+    bad = write_config(tmp_path / "bad.yaml", "lcm:\n  channel_prefix: \"R2 \"\n")
+    r = offline(bad, recording, check=False)
+    assert r.returncode == 1 and "bad.yaml:2: lcm.channel_prefix" in r.stderr
+
+
 def test_not_excited_says_what_is_missing(trajectory, tmp_path):
     """A robot that hardly moves, with the noisy accelerometer as the
     source: the refusal names the failed test, the weakest parameters and
