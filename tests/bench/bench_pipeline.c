@@ -154,9 +154,9 @@ static int window_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     int i = 0;
     while (i < n && !(evs[i].kind == -1 && evs[i].action == LOADID_CMD_START)) feed_one(p, &evs[i++]);
     const double t0 = now_s();
-    for (; i < n; ++i) {
+    for (; i < n; ++i) { /* START acts once the joints cover it (the fixed lag) */
         feed_one(p, &evs[i]);
-        if (state != LOADID_STATE_ESTIMATING) break;
+        if (state == LOADID_STATE_DONE || state == LOADID_STATE_FAILED) break;
     }
     *seconds = now_s() - t0;
     loadid_pipeline_status_t st;
