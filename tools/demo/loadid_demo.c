@@ -55,7 +55,7 @@ static void usage(FILE *f) {
             "  with its eq. (37) error.\n"
             "  --seed N          simulation and search seed (default 1)\n"
             "  --offset-model M  zeroing (eqs. 7-9, default) or estimate (16 parameters)\n"
-            "  --signals S       signal source (default mixed)\n"
+            "  --signals S       signal source (default kf, as the service)\n"
             "  --keep DIR        write the recording (can.log, lcm.log, truth.yaml) to DIR\n"
             "                    and keep it (default: a temporary folder, removed)\n");
 }
@@ -155,7 +155,7 @@ static void print_results(const loadid_config_t *cfg, const loadid_pipeline_esti
 
 int main(int argc, char **argv) {
     unsigned long long seed = 1;
-    const char *keep = NULL, *offset_model = "zeroing", *signals = "mixed";
+    const char *keep = NULL, *offset_model = "zeroing", *signals = "kf";
     static const struct option opts[] = {
         {"help", no_argument, NULL, 'h'},       {"offset-model", required_argument, NULL, 'o'},
         {"seed", required_argument, NULL, 's'}, {"signals", required_argument, NULL, 'g'},
