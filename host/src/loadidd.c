@@ -59,7 +59,7 @@ static int verbose;
 
 static void log_line(void *ctx, const char *msg) {
     (void)ctx;
-    if (verbose) fprintf(stderr, "%s: %s\n", prog, msg);
+    if (verbose || strncmp(msg, "warning: ", 9) == 0) fprintf(stderr, "%s: %s\n", prog, msg);
 }
 
 static void state_line(void *ctx, int64_t utime, int state, const char *reason) {

@@ -199,6 +199,18 @@ def test_channel_prefix_reads_its_own_channels(recording, tmp_path):
     assert r.returncode == 1 and "bad.yaml:2: lcm.channel_prefix" in r.stderr
 
 
+def test_configured_noise_the_data_contradict_is_said(recording, tmp_path):
+    """noise.force configured 3 times too small: used as configured (it
+    overrides), but a warning names it with the measured level, without
+    --verbose; noise: auto (the default) says nothing."""
+    cfg = write_config(tmp_path / "c.yaml", "noise:\n  force: 0.033\n")
+    _, err = offline(cfg, recording)
+    assert "warning: noise.force is 0.033 but the data measure 0.1" in err, err
+    assert "noise.torque" not in err
+    _, err = offline(write_config(tmp_path / "auto.yaml"), recording)
+    assert "warning" not in err, err
+
+
 def test_not_excited_says_what_is_missing(trajectory, tmp_path):
     """A robot that hardly moves, with the noisy accelerometer as the
     source: the refusal names the failed test, the weakest parameters and
