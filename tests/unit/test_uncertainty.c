@@ -61,6 +61,17 @@ static void invert(double *M, int n, double *inv) {
     }
 }
 
+/* An estimator of cfg fed all of d: its estimate, phi_std and scale. */
+static void fit(const dataset_t *d, const loadid_est_config_t *cfg, loadid_real_t phi[10],
+                loadid_real_t std[10], loadid_real_t *scale) {
+    loadid_est_t *est;
+    assert_int_equal(loadid_est_create(cfg, &est), 0);
+    assert_int_equal(dataset_feed(d, est, 0, d->n_samples), 0);
+    assert_int_equal(loadid_est_estimate(est, phi, NULL), 0);
+    assert_int_equal(loadid_est_uncertainty(est, phi, std, scale), 0);
+    loadid_est_destroy(est);
+}
+
 static void test_ls_std_equals_normal_equations(void **state) {
     (void)state;
     dataset_spec_t spec = {.seed = 7, .n_samples = 1500, .n_params = 10, .noise = kPaperNoise};
@@ -70,12 +81,8 @@ static void test_ls_std_equals_normal_equations(void **state) {
     for (int mi = 0; mi < 2; ++mi) {
         loadid_est_config_t cfg;
         dataset_config(&spec, methods[mi], &cfg);
-        loadid_est_t *est;
-        assert_int_equal(loadid_est_create(&cfg, &est), 0);
-        assert_int_equal(dataset_feed(&d, est, 0, d.n_samples), 0);
         loadid_real_t phi[10], std[10], scale;
-        assert_int_equal(loadid_est_estimate(est, phi, NULL), 0);
-        assert_int_equal(loadid_est_uncertainty(est, phi, std, &scale), 0);
+        fit(&d, &cfg, phi, std, &scale);
         /* Reference: G[g] = sum over group g's rows of A^T W A, rss[g] its
          * weighted residual; H = G[0] + G[1]. */
         double G[2][100] = {{0}}, H[100], inv[100], rss[2] = {0};
@@ -113,7 +120,6 @@ static void test_ls_std_equals_normal_equations(void **state) {
          * about 1e-9 of the information. */
         assert_true(worst < 1e-6);
         assert_true(fabs(scale - sqrt(s2_pooled)) < 1e-9 * sqrt(s2_pooled));
-        loadid_est_destroy(est);
     }
     dataset_free(&d);
 }
@@ -133,15 +139,10 @@ static void coverage(loadid_method_t method, const loadid_synth_noise_t *noise, 
         dataset_config(&spec, method, &cfg);
         if (noise->sigma_spec == 0)
             for (int i = 0; i < 3; ++i) cfg.row_sigma[i] = noise->sigma_f, cfg.row_sigma[3 + i] = noise->sigma_tau;
-        loadid_est_t *est;
-        assert_int_equal(loadid_est_create(&cfg, &est), 0);
-        assert_int_equal(dataset_feed(&d, est, 0, d.n_samples), 0);
         loadid_real_t phi[10], std[10], scale;
-        assert_int_equal(loadid_est_estimate(est, phi, NULL), 0);
-        assert_int_equal(loadid_est_uncertainty(est, phi, std, &scale), 0);
+        fit(&d, &cfg, phi, std, &scale);
         for (int j = 0; j < 10; ++j) in[j] += fabs(phi[j] - d.truth[j]) <= 2 * std[j];
         *mean_scale += scale / kSeeds;
-        loadid_est_destroy(est);
         dataset_free(&d);
     }
     for (int j = 0; j < 10; ++j) cover[j] = (double)in[j] / kSeeds;
