@@ -3,6 +3,7 @@
  * configuration contract").
  *
  *   loadidd --config FILE --offline RECORDING_DIR [--result OUT.json]
+ *           [--trace TRACE.csv [--publish-every N]]
  *       runs the pipeline (pipeline.h) over a recording as fast as the
  *       machine allows, with no sockets: can.log and lcm.log merged in time
  *       order, commands acting at their utime; writes the final estimate of
@@ -10,7 +11,9 @@
  *       Exit 0, or non-zero with a one-line reason on stderr; a recording
  *       that ends before the window, lacks ZERO or START, or lacks joint
  *       data for part of the window is written with "complete": false and
- *       exits 3 unless --allow-incomplete.
+ *       exits 3 unless --allow-incomplete. --trace also writes every
+ *       method's estimate every N-th sample (default 10) and the final ones
+ *       as CSV (trace_csv.h); without it nothing is published before DONE.
  *   loadidd --config FILE [--can-file CAN.LOG] [--publish-every N]
  *       the live service (live.c): joint states and commands from LCM, JR3
  *       frames from SocketCAN (can.interface) or, with --can-file, from a
@@ -35,20 +38,25 @@
 #include "live.h"
 #include "result_json.h"
 #include "saved_result.h"
+#include "trace_csv.h"
 
 static const char *prog = "loadidd";
 
 static void usage(FILE *out) {
     fprintf(out,
             "usage: %s --config FILE --offline RECORDING_DIR [--result OUT.json]\n"
-            "                [--allow-incomplete] [--verbose]\n"
+            "                [--trace TRACE.csv [--publish-every N]] [--allow-incomplete]\n"
+            "                [--verbose]\n"
             "       %s --config FILE [--can-file CAN.LOG [--can-file-epoch US]]\n"
             "                [--publish-every N] [--verbose]\n"
             "Estimates the inertial parameters of the load on the robot's wrist sensor\n"
             "(Kubus, Kroeger, Wahl 2008). --offline runs the pipeline over a recording\n"
             "(can.log, lcm.log) and writes the final estimate of every configured method\n"
             "as a JSON array to OUT.json (default stdout); an incomplete recording exits 3\n"
-            "(\"complete\": false) unless --allow-incomplete. Without --offline it runs live:\n"
+            "(\"complete\": false) unless --allow-incomplete; --trace writes every method's\n"
+            "estimate every N-th sample (--publish-every, default 10) and the final ones as\n"
+            "CSV (t_s since START, method, valid, samples, mass, com, inertia about the COM,\n"
+            "phi). Without --offline it runs live:\n"
             "LCM in and out, JR3 frames from SocketCAN or a candump log (--can-file),\n"
             "or a Modbus F/T sensor (sensor.type modbus). --publish-every overrides\n"
             "estimation.publish_every.\n",
@@ -62,27 +70,41 @@ static void log_line(void *ctx, const char *msg) {
     if (verbose || strncmp(msg, "warning: ", 9) == 0) fprintf(stderr, "%s: %s\n", prog, msg);
 }
 
+/* ctx: the trace (NULL without --trace), which counts time from START. */
 static void state_line(void *ctx, int64_t utime, int state, const char *reason) {
-    (void)ctx;
+    if (ctx && state == LOADID_STATE_ESTIMATING) loadid_trace_csv_start(ctx, utime);
     static const char *names[] = {"IDLE", "ZEROING", "ESTIMATING", "DONE", "FAILED"};
     if (verbose || state == LOADID_STATE_FAILED)
         fprintf(stderr, "%s: %lld: %s%s%s\n", prog, (long long)utime, names[state],
                 *reason ? ": " : "", reason);
 }
 
+static void trace_row(void *ctx, const loadid_pipeline_estimate_t *e) {
+    loadid_trace_csv_row(ctx, e);
+}
+
+/* trace_path NULL: no trace, and nothing published before DONE (the
+ * result as it always was); else estimates every publish_every-th sample. */
 static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, const char *dir,
-                       const char *result_path, int allow_incomplete) {
+                       const char *result_path, const char *trace_path, int publish_every,
+                       int allow_incomplete) {
     char err[4400];
-    loadid_pipeline_sink_t sink = {.log = log_line, .state = state_line};
-    loadid_pipeline_t *p = NULL;
-    if (loadid_pipeline_create(cfg, chain, &sink, 0, &p, err, sizeof err) != 0) {
-        fprintf(stderr, "%s: %s\n", prog, err);
+    loadid_trace_csv_t trace;
+    if (trace_path && loadid_trace_csv_open(&trace, trace_path, err, sizeof err) != 0) {
+        fprintf(stderr, "%s: --trace: %s\n", prog, err);
         return 1;
     }
+    loadid_pipeline_sink_t sink = {.log = log_line, .state = state_line};
+    if (trace_path) sink.ctx = &trace, sink.estimate = trace_row;
+    loadid_pipeline_t *p = NULL;
+    int rc = loadid_pipeline_create(cfg, chain, &sink, trace_path ? publish_every : 0, &p, err,
+                                    sizeof err);
     int truncated = 0;
-    if (loadid_offline_run(p, dir, &truncated, err, sizeof err) != 0) {
+    if (rc == 0) rc = loadid_offline_run(p, dir, &truncated, err, sizeof err);
+    if (rc != 0) {
         fprintf(stderr, "%s: %s\n", prog, err);
         loadid_pipeline_destroy(p);
+        if (trace_path) loadid_trace_csv_close(&trace, err, sizeof err);
         return 1;
     }
     if (truncated) fprintf(stderr, "%s: warning: %s/lcm.log ends in a damaged event\n", prog, dir);
@@ -139,12 +161,17 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
         }
     }
     loadid_pipeline_destroy(p);
+    if (trace_path && loadid_trace_csv_close(&trace, err, sizeof err) != 0) {
+        fprintf(stderr, "%s: --trace: %s\n", prog, err);
+        if (status == 0 || status == 3) status = 1;
+    }
     return status;
 }
 
 int main(int argc, char **argv) {
     const char *config_path = NULL, *offline = NULL, *result = NULL, *can_file = NULL;
-    int publish_every = 0; /* 0: estimation.publish_every */
+    const char *trace = NULL;
+    int publish_every = 0; /* 0: estimation.publish_every (live), 10 (--trace) */
     int allow_incomplete = 0;
     long long epoch = 0;
     static const struct option opts[] = {
@@ -152,7 +179,7 @@ int main(int argc, char **argv) {
         {"result", required_argument, NULL, 'r'}, {"verbose", no_argument, NULL, 'v'},
         {"can-file", required_argument, NULL, 'f'}, {"publish-every", required_argument, NULL, 'p'},
         {"can-file-epoch", required_argument, NULL, 'e'},
-        {"allow-incomplete", no_argument, NULL, 'a'},
+        {"allow-incomplete", no_argument, NULL, 'a'}, {"trace", required_argument, NULL, 't'},
         {"help", no_argument, NULL, 'h'},         {NULL, 0, NULL, 0}};
     int c;
     while ((c = getopt_long(argc, argv, "c:o:r:vh", opts, NULL)) != -1) {
@@ -164,6 +191,7 @@ int main(int argc, char **argv) {
             case 'f': can_file = optarg; break;
             case 'e': epoch = strtoll(optarg, NULL, 10); break;
             case 'a': allow_incomplete = 1; break;
+            case 't': trace = optarg; break;
             case 'p': {
                 char *end;
                 long v = strtol(optarg, &end, 10);
@@ -187,6 +215,10 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s: --result needs --offline\n", prog);
         return 2;
     }
+    if (trace && !offline) {
+        fprintf(stderr, "%s: --trace needs --offline\n", prog);
+        return 2;
+    }
     static loadid_config_t cfg;
     loadid_chain_t chain;
     if (loadid_setup_load(prog, config_path, &cfg, &chain) != 0) return 1;
@@ -197,5 +229,6 @@ int main(int argc, char **argv) {
                                       .verbose = verbose};
         return loadid_live_run(&cfg, &chain, &live);
     }
-    return run_offline(&cfg, &chain, offline, result, allow_incomplete);
+    return run_offline(&cfg, &chain, offline, result, trace, publish_every ? publish_every : 10,
+                       allow_incomplete);
 }

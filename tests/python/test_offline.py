@@ -8,7 +8,9 @@ window that truth.yaml gives.
 
 from __future__ import annotations
 
+import csv
 import json
+import math
 import re
 import shutil
 import subprocess
@@ -330,3 +332,85 @@ def test_bad_input_gives_one_line_and_non_zero(recording, tmp_path):
     (no_start / "lcm.log").write_bytes(b"")
     r = offline(cfg, no_start, check=False)
     assert r.returncode != 0 and "no START" in r.stderr
+
+
+TRACE_HEADER = ("t_s,method,valid,samples,mass,com_x,com_y,com_z,ixx,ixy,ixz,iyy,iyz,izz,"
+                + ",".join(f"phi{i}" for i in range(10)))
+
+
+def read_trace(path):
+    """The trace's rows by method, in file order, numbers as floats."""
+    rows = {}
+    with open(path, newline="") as f:
+        for r in csv.DictReader(f):
+            row = {k: (v if k == "method" else float(v)) for k, v in r.items()}
+            rows.setdefault(r["method"], []).append(row)
+    return rows
+
+
+def test_trace_has_every_estimate_every_n_samples(recording, tmp_path):
+    """--trace: every on-line method's estimate every 10th sample (the
+    default), then every method's final one (REFINED only that); t_s from
+    START; the numbers are the estimator's, as the JSON result says them."""
+    cfg = write_config(tmp_path / "c.yaml", "estimation:\n  methods: [RTLS, RLS, REFINED]\n")
+    trace = tmp_path / "trace.csv"
+    result, _ = offline(cfg, recording, "--trace", trace)
+    assert trace.read_text().splitlines()[0] == TRACE_HEADER
+    rows = read_trace(trace)
+    assert sorted(rows) == ["REFINED", "RLS", "RTLS"]
+    final = {r["method"]: r for r in result}
+    for m in ("RTLS", "RLS"):
+        on_line, last = rows[m][:-1], rows[m][-1]
+        # 1500 samples in the window: a row after every 10th.
+        assert [int(r["samples"]) for r in on_line] == list(range(10, 1501, 10)), m
+        t = np.array([r["t_s"] for r in on_line])
+        assert np.all(np.diff(t) > 0), m
+        # 1 kHz samples from START: 10 ms apart, the first within 10 ms.
+        np.testing.assert_allclose(np.diff(t), 0.010, atol=1e-4)
+        assert 0.009 <= t[0] <= 0.0105 and 1.49 <= t[-1] < 1.5, (t[0], t[-1])
+        assert last["samples"] == final[m]["samples"] == 1500 and last["t_s"] >= t[-1]
+        assert last["valid"] == 1 and on_line[-1]["valid"] == 1
+        # Early rows: no estimate yet, said as valid 0 and nan.
+        assert on_line[0]["valid"] == 0 and math.isnan(on_line[0]["mass"])
+    assert len(rows["REFINED"]) == 1 and rows["REFINED"][0]["samples"] == 1500
+    assert rows["REFINED"][0]["t_s"] == rows["RTLS"][-1]["t_s"]
+    # The last on-line RTLS row (after sample 1500) and every final row are
+    # the JSON result's phi as %.9g prints it: exactly the JSON's number
+    # rounded to 9 digits (so within 5e-9 relative).
+    checks = [("RTLS", rows["RTLS"][-2])] + [(m, rows[m][-1]) for m in rows]
+    for m, row in checks:
+        got = [row[f"phi{i}"] for i in range(10)]
+        want = [float(f"{x:.9g}") for x in final[m]["phi"]]
+        assert got == want, (m, got, final[m]["phi"])
+        np.testing.assert_allclose(got, final[m]["phi"], rtol=5e-9, atol=0)
+        # mass, COM and the inertia about the COM are those of the row's phi.
+        pm, pc, pic = physical(np.array(got))
+        assert math.isclose(row["mass"], pm, rel_tol=1e-8)
+        np.testing.assert_allclose([row[k] for k in ("com_x", "com_y", "com_z")], pc, rtol=1e-7)
+        np.testing.assert_allclose([row[k] for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")],
+                                   pic, rtol=1e-6, atol=1e-11)
+    # Publishing brings lazily updated state (RTLS's blocked SVD, the
+    # excitation's condition number) up to date more often: the result with
+    # --trace differs from the one without in the last digits only.
+    plain, _ = offline(cfg, recording)
+    assert [a["method"] for a in plain] == [b["method"] for b in result]
+    for a, b in zip(result, plain):
+        np.testing.assert_allclose(a["phi"], b["phi"], rtol=1e-12, atol=0)
+    # --publish-every sets the interval.
+    offline(cfg, recording, "--trace", trace, "--publish-every", "25", "--result", tmp_path / "r")
+    rows = read_trace(trace)
+    assert [int(r["samples"]) for r in rows["RLS"][:-1]] == list(range(25, 1501, 25))
+
+
+def test_trace_that_cannot_be_written_fails_in_one_line(recording, tmp_path):
+    cfg = write_config(tmp_path / "c.yaml")
+    bad = tmp_path / "missing" / "trace.csv"
+    r = offline(cfg, recording, "--trace", bad, check=False)
+    assert r.returncode == 1 and r.stdout == ""
+    assert r.stderr.splitlines() == [f"loadidd: --trace: cannot write {bad}: No such file or "
+                                     "directory"], r.stderr
+    r = offline(cfg, recording, "--trace", "/dev/full", check=False)  # fails at the end
+    assert r.returncode == 1 and "cannot write /dev/full: No space left on device" in r.stderr
+    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(cfg), "--trace", str(bad)],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "--trace needs --offline" in r.stderr

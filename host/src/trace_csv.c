@@ -1,0 +1,54 @@
+/* The estimate trace of loadidd --offline --trace (trace_csv.h). */
+#include "trace_csv.h"
+
+#include <errno.h>
+#include <math.h>
+#include <string.h>
+
+#include "loadid/core.h"
+
+int loadid_trace_csv_open(loadid_trace_csv_t *t, const char *path, char *err, size_t errlen) {
+    memset(t, 0, sizeof *t);
+    t->path = path;
+    t->out = fopen(path, "w");
+    if (!t->out) {
+        const int e = errno;
+        snprintf(err, errlen, "cannot write %s: %s", path, strerror(e));
+        return -e;
+    }
+    fputs("t_s,method,valid,samples,mass,com_x,com_y,com_z,ixx,ixy,ixz,iyy,iyz,izz", t->out);
+    for (int i = 0; i < 10; ++i) fprintf(t->out, ",phi%d", i);
+    fputc('\n', t->out);
+    return 0;
+}
+
+void loadid_trace_csv_start(loadid_trace_csv_t *t, int64_t utime) { t->start_us = utime; }
+
+void loadid_trace_csv_row(loadid_trace_csv_t *t, const loadid_pipeline_estimate_t *e) {
+    if (!t->out) return;
+    /* An estimate with no sample since START carries an older time. */
+    const double t_s = e->utime >= t->start_us ? (double)(e->utime - t->start_us) / 1e6 : 0.0;
+    double v[4 + 6 + 10];
+    v[0] = e->mass;
+    for (int i = 0; i < 3; ++i) v[1 + i] = e->com[i];
+    for (int i = 0; i < 6; ++i) v[4 + i] = e->inertia_com[i];
+    for (int i = 0; i < 10; ++i) v[10 + i] = e->phi[i];
+    fprintf(t->out, "%.9g,%s,%d,%lld", t_s, loadid_method_name((loadid_method_t)e->method),
+            e->valid ? 1 : 0, (long long)e->samples);
+    for (int i = 0; i < 20; ++i) fprintf(t->out, ",%.9g", e->valid ? v[i] : NAN);
+    if (fputc('\n', t->out) == EOF && !t->errnum) t->errnum = errno ? errno : EIO;
+}
+
+int loadid_trace_csv_close(loadid_trace_csv_t *t, char *err, size_t errlen) {
+    if (!t->out) return 0;
+    const int bad = ferror(t->out);
+    errno = 0;
+    const int rc = fclose(t->out); /* flushes: a full disk shows here */
+    const int e = t->errnum ? t->errnum : errno ? errno : EIO;
+    t->out = NULL;
+    if (bad || rc != 0) {
+        snprintf(err, errlen, "cannot write %s: %s", t->path, strerror(e));
+        return -1;
+    }
+    return 0;
+}
