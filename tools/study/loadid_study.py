@@ -9,9 +9,20 @@ and, from the same recording, a batch total least squares written here in
 numpy and Pinocchio only (the "reference": what the data support). It prints
 per cell and method the median and 90th percentile of the mass error [%],
 the COM error [mm], the inertia-about-the-COM error [%], the ratio of each
-median to the reference's, the coverage of phi_std, and the share of runs
-that identified the inertia; and writes every run's numbers as CSV and a
-JSON summary.
+median to the reference's, the coverage of phi_std, the share of runs
+that identified the inertia, and the time to a usable estimate; and writes
+every run's numbers as CSV and a JSON summary.
+
+The time to a usable estimate (function ``usable_time``): loadidd runs with
+``--trace`` (every method's estimate every TRACE_EVERY-th sample, 10 ms at
+1 kHz, and the final ones); per run and method it is the earliest t_s (s
+after START) from which every later row of the method is valid and within
+USABLE (|mass error| <= 1 %, COM error <= 2 mm, inertia-about-the-COM error
+<= 15 %, by ``errors``), infinite ("never") when the final row is not.
+REFINED has only its final row, at the end of the window: its t_s when that
+row is within the bounds. The table gives per cell the median over seeds
+(never counted as infinite: "never" when half the seeds or more did not get
+there) and how many seeds never did.
 
 Run it with the project's venv: ``tools/study/loadid-study --quick``
 (``--help`` lists the options; ``--self-test`` checks this file's own
@@ -139,6 +150,9 @@ ZEROING_WINDOW_S = 0.2      # zeroing.window_s (default, not changed here)
 ESTIMATION_S = 1.5          # estimation.duration_s (default)
 SMOOTH_DEGREE = 5           # the encoder smoother (see smooth_joints)
 SMOOTH_HALF_WIDTH_S = 0.05
+TRACE_EVERY = 10            # loadidd --publish-every with --trace: 10 ms at 1 kHz
+# A usable estimate: the issue's bounds on the errors of ``errors``.
+USABLE = dict(mass_pct=1.0, com_mm=2.0, inertia_pct=15.0)
 
 # --------------------------------------------------------------------------
 # Loads from geometry: inertia about the COM in body axes, rotated into S,
@@ -241,6 +255,33 @@ def errors(phi_est, phi_true) -> dict:
     return dict(mass_pct=100.0 * abs(m - mt) / mt,
                 com_mm=1000.0 * float(np.linalg.norm(c - ct)),
                 inertia_pct=100.0 * float(np.linalg.norm(Ic - Ict) / np.linalg.norm(Ict)))
+
+
+def read_trace(path) -> dict:
+    """loadidd --trace's CSV: per method, in file order, (t_s, valid, phi)."""
+    series = {}
+    with open(path, newline="") as f:
+        for r in csv.DictReader(f):
+            phi = np.array([float(r[f"phi{i}"]) for i in range(10)])
+            series.setdefault(r["method"], []).append((float(r["t_s"]), r["valid"] == "1", phi))
+    return series
+
+
+def usable(phi, truth, bounds=USABLE) -> bool:
+    """Whether phi's errors are within bounds (False for nan: no estimate)."""
+    e = errors(phi, truth)
+    return all(e[k] <= bounds[k] for k in bounds)
+
+
+def usable_time(series, truth, bounds=USABLE) -> float:
+    """The earliest t_s from which every later row of one method's series
+    is valid and usable; inf when its last row is not."""
+    t_usable = math.inf
+    for t, valid, phi in reversed(series):
+        if not (valid and usable(phi, truth, bounds)):
+            break
+        t_usable = t
+    return t_usable
 
 
 # --------------------------------------------------------------------------
@@ -759,19 +800,27 @@ def run_recording(task: dict) -> list:
     ref_s = time.monotonic() - t1
     for cell in task["cells"]:
         out = work / "results" / f"{task['rec_name']}-{cell['noise']}.json"
+        trace = out.with_suffix(".trace.csv")
         out.parent.mkdir(parents=True, exist_ok=True)
         t2 = time.monotonic()
         try:
             run(build, "loadidd", ["--config", cell["est_config"], "--offline", rec, "--result", out,
+                                   "--trace", trace, "--publish-every", TRACE_EVERY,
                                    "--allow-incomplete"], ok_codes=(0, 3))
             result = json.loads(out.read_text())
             err = None
         except Exception as e:  # noqa: BLE001
             result, err = [], f"loadidd failed: {e}"
         est_s = time.monotonic() - t2
+        try:
+            times = {m: usable_time(sr, truth) for m, sr in read_trace(trace).items()}
+        except (OSError, ValueError, KeyError):
+            times = {}                     # no trace: no time (the row's error says why)
+        if not task["keep"]:
+            trace.unlink(missing_ok=True)
         by_method = {r.get("method"): r for r in result}
         for m in task["methods"]:
-            row = dict(base, noise=cell["noise"], method=m, seconds=est_s)
+            row = dict(base, noise=cell["noise"], method=m, seconds=est_s, usable_s=times.get(m))
             r = by_method.get(m)
             if r is None:
                 row.update(ok=False, error=err or "method missing from the result")
@@ -876,6 +925,8 @@ def summarise(rows, methods):
                 s["inertia_identified"] = (float(np.mean([r.get("inertia_identified", 0)
                                                           for r in ok])) if ok else None)
                 s["incomplete"] = sum(1 for r in mr if r.get("complete") is False)
+                s["usable_s"] = usable_summary([r["usable_s"] for r in mr
+                                                if r.get("usable_s") is not None])
                 s["report_inconsistent"] = sum(1 for r in ok if r.get("report_consistent") is False)
             entry["methods"][m] = s
         ref = entry["methods"]["REF"]
@@ -890,18 +941,37 @@ def summarise(rows, methods):
     return summary
 
 
+def usable_summary(times) -> dict:
+    """Median over seeds of the time to a usable estimate, never counted as
+    infinite: median_s a number, "never" (half the seeds or more never got
+    there) or None (no traced run); never: how many seeds never did."""
+    t = np.array(times, float)
+    med = float(np.median(t)) if len(t) else None
+    return dict(median_s="never" if med is not None and math.isinf(med) else med,
+                never=int(np.isinf(t).sum()), runs=int(len(t)))
+
+
 def _f(x, fmt="{:.2f}", width=6):
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return "-".rjust(width)
     return fmt.format(x).rjust(width)
 
 
+def _usable_cell(u) -> str:
+    if not u or not u["runs"]:
+        return f"{'':>6} {'':>6}"
+    med = u["median_s"]
+    return f"{med if med == 'never' else format(med, '.3f'):>6} {u['never']:>6}"
+
+
 def table(summary, seeds) -> str:
     lines = []
     head = (f"{'method':<10}{'ok':>6} | {'mass %':^13} | {'COM mm':^13} | {'inertia %':^13} |"
-            f" {'ratio to REF (median)':^21} | {'2-sigma coverage':^19} | {'inertia':>7}")
+            f" {'ratio to REF (median)':^21} | {'2-sigma coverage':^19} | {'inertia':>7} |"
+            f" {'to usable':^13}")
     sub = (f"{'':<10}{'':>6} | {'med':>6} {'p90':>6} | {'med':>6} {'p90':>6} | {'med':>6} {'p90':>6} |"
-           f" {'mass':>6} {'COM':>6} {'inert':>7} | {'all':>5} {'min':>5} {'(par)':<7} | {'ident.':>7}")
+           f" {'mass':>6} {'COM':>6} {'inert':>7} | {'all':>5} {'min':>5} {'(par)':<7} | {'ident.':>7} |"
+           f" {'med s':>6} {'never':>6}")
     for e in summary:
         lines.append("")
         lines.append(f"== {e['robot']} / {e['load']} / {e['noise']}  ({seeds} seeds)")
@@ -920,7 +990,7 @@ def table(summary, seeds) -> str:
                 f" {_f(s['com_mm']['median'])} {_f(s['com_mm']['p90'])} |"
                 f" {_f(s['inertia_pct']['median'], '{:.1f}')} {_f(s['inertia_pct']['p90'], '{:.1f}')} |"
                 f" {_f(r['mass_pct'])} {_f(r['com_mm'])} {_f(r['inertia_pct'], '{:.2f}', 7)} |"
-                f" {cov} | {ident}")
+                f" {cov} | {ident} | {_usable_cell(s.get('usable_s'))}")
             for err in s["errors"][:2]:
                 lines.append(f"{'':<10}  ! {err[:110]}")
     return "\n".join(lines)
@@ -929,7 +999,8 @@ def table(summary, seeds) -> str:
 CSV_FIELDS = (["robot", "load", "noise", "seed", "method", "ok", "error", "complete", "samples",
                "mass_pct", "com_mm", "inertia_pct", "model_mass_pct", "model_com_mm",
                "model_inertia_pct", "identified", "inertia_identified", "projected", "noise_scale",
-               "report_consistent"] + [f"cov{i}" for i in range(10)] + [f"phi{i}" for i in range(10)]
+               "report_consistent", "usable_s"] + [f"cov{i}" for i in range(10)]
+              + [f"phi{i}" for i in range(10)]
               + ["noise_ratio", "sigma_f", "sigma_tau", "sigma_spec", "sigma_alpha", "saturated",
                  "seconds", "sim_seconds"])
 
@@ -1083,6 +1154,44 @@ def self_test() -> int:
     check("qdd of a 2 Hz multi-sine from 2^20-count encoders", e2 < 0.02,
           f"rms {e2:.1e} rad/s^2 (quantisation alone predicts {pred[2]:.1e}), qd {e1:.1e} rad/s")
 
+    print("time to a usable estimate: a synthetic trace through read_trace and usable_time")
+    m_t, c_t, ic_t = physical(O1_PHI)
+
+    def off(dm=0.0, dc=0.0, di=0.0):
+        """o1 with its mass dm, its COM dc [m] along x, its inertia about
+        the COM di off (relative)."""
+        return phi_from_inertia(m_t * (1 + dm), c_t + np.array([dc, 0.0, 0.0]), ic_t * (1 + di))
+    good = off(0.0099, 0.00199, 0.149)          # just inside every bound
+    nan = np.full(10, np.nan)
+    # invalid, mass 5 % out, in (0.03), in, COM 3 mm out, in, inertia 16 %
+    # out, in from 0.08 on (the final row repeats the last on-line one)
+    enters = [(0.01, 0, nan), (0.02, 1, off(dm=0.05)), (0.03, 1, good), (0.04, 1, off()),
+              (0.05, 1, off(dc=0.003)), (0.06, 1, off()), (0.07, 1, off(di=0.16)),
+              (0.08, 1, off(dm=-0.0099)), (0.09, 1, good), (0.09, 1, good)]
+    leaves = enters[:-1] + [(0.09, 1, off(dm=0.0101))]   # the final estimate is out
+    broken = enters[:8] + [(0.09, 0, nan), (0.09, 1, good)]  # no estimate at 0.09 on line
+    series = dict(RTLS=enters, RLS=leaves, RIV=broken, REFINED=[(1.49937, 1, good)],
+                  TLS_BATCH=[(1.49937, 1, off(di=-0.151))])
+    want = dict(RTLS=0.08, RLS=math.inf, RIV=0.09, REFINED=1.49937, TLS_BATCH=math.inf)
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix="loadid-study-selftest-"))
+    try:
+        with open(tmp / "trace.csv", "w") as f:   # as loadidd writes it (trace_csv.h)
+            f.write("t_s,method,valid,samples,mass,com_x,com_y,com_z,ixx,ixy,ixz,iyy,iyz,izz,"
+                    + ",".join(f"phi{i}" for i in range(10)) + "\n")
+            for k in range(10):
+                for m, sr in series.items():
+                    if k < len(sr):
+                        t, valid, phi = sr[k]
+                        pm, pc, pic = physical(phi)
+                        vals = [pm, *pc, *pic[np.triu_indices(3)], *phi]
+                        f.write(f"{t:.9g},{m},{valid},{10 * (k + 1)},"
+                                + ",".join(f"{v:.9g}" for v in vals) + "\n")
+        got = {m: usable_time(sr, O1_PHI) for m, sr in read_trace(tmp / "trace.csv").items()}
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    check("enters, leaves, re-enters: the time it enters for good", got == want,
+          ", ".join(f"{m} {got.get(m)} (want {want[m]})" for m in want))
+
     print("JR3 frames: counts, sequence, status, full-scale frames")
     fs = np.array([[200.0] * 3, [12.0] * 3, [98.1] * 3, [1000.0] * 3])
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="loadid-study-selftest-"))
@@ -1159,7 +1268,9 @@ def main(argv=None) -> int:
                          "configuration's)")
     ap.add_argument("--quick", action="store_true",
                     help="3 seeds, rx60, loads o1 and box, paper noise (options given override)")
-    ap.add_argument("--keep", action="store_true", help="keep the recordings (about 1 MB each)")
+    ap.add_argument("--keep", action="store_true",
+                    help="keep the recordings (about 1 MB each) and loadidd's estimate traces "
+                         "(results/*.trace.csv, about 0.2 MB each)")
     ap.add_argument("--self-test", action="store_true",
                     help="check the geometry, regressor, smoother, TLS and JR3 decoding of this "
                          "program against independent computations, and exit")
@@ -1269,7 +1380,12 @@ def main(argv=None) -> int:
     print("mass %: |m - m_true| / m_true; COM mm: |c - c_true|; inertia %: ||I_C - I_C,true||_F / "
           "||I_C,true||_F; ratio: median / REF's median; coverage: share of |phi_i - phi_true,i| "
           "<= 2 phi_std_i over seeds and the determined parameters (min: the worst parameter); "
-          "inertia ident.: share of runs with \"inertia\" identified. REF: batch TLS from the "
+          "inertia ident.: share of runs with \"inertia\" identified; to usable: median over "
+          "seeds of the time after START from which the estimate stays within mass "
+          f"{USABLE['mass_pct']:g} %, COM {USABLE['com_mm']:g} mm, inertia "
+          f"{USABLE['inertia_pct']:g} % (every {TRACE_EVERY}th "
+          "sample and the final estimate; REFINED's only at the end), never: seeds that did not "
+          "get there. REF: batch TLS from the "
           "recording, kinematics from the smoothed encoders; REF_ACC: the same with a - g and "
           "alpha from the JR3 accelerometer.")
     bad = sum(1 for r in rows if not r.get("ok"))
