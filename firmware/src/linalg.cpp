@@ -80,6 +80,12 @@ void sym_eigenvalues(const Square &G, Values &lambda) {
     lambda = es.eigenvalues();
 }
 
+void sym_eigen(const Square &G, Square &V, Values &lambda) {
+    const Eigen::SelfAdjointEigenSolver<Square> es(G, Eigen::ComputeEigenvectors);
+    V = es.eigenvectors();
+    lambda = es.eigenvalues();
+}
+
 void householder_q(const Square &A, Square &Q, Values &r_diag) {
     const Eigen::HouseholderQR<Square> qr(A);
     Q = qr.householderQ();

@@ -42,6 +42,10 @@ void svd_left(const Work &M, Square &U, Values &s);
 // Eigenvalues of the symmetric G, ascending.
 void sym_eigenvalues(const Square &G, Values &lambda);
 
+// Eigenvalues (ascending) and eigenvectors (columns, in that order) of the
+// symmetric G.
+void sym_eigen(const Square &G, Square &V, Values &lambda);
+
 // A (rows x cols, rows >= cols) = Q R by Householder: the full Q
 // (rows x rows) and the diagonal of R.
 void householder_q(const Square &A, Square &Q, Values &r_diag);
