@@ -105,7 +105,8 @@ typedef struct {
     int sigma_min_multiplicity;    /* RTLS, TLS_BATCH: p of the Householder
                                       step (1 = unique); 0 for the others */
     int reorthogonalisations;      /* RTLS: times U was re-orthogonalised */
-    loadid_real_t orthogonality_error; /* RTLS: ||U^T U - I||_F now */
+    loadid_real_t orthogonality_error; /* RTLS: ||U^T U - I||_F, measured at most
+                                          64 updates ago (rtls.hpp) */
 } loadid_est_info_t;
 
 typedef struct loadid_est loadid_est_t; /* opaque */
