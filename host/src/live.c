@@ -16,6 +16,9 @@
  * event (a CAN read, an LCM message, a tick), is kept in a histogram:
  * status_t's p50, p99 and max over the last second.
  *
+ * REFINED, when configured, runs on the pipeline's worker thread
+ * (worker.h); its end comes in as one more fd of the epoll set.
+ *
  * After start-up (the first epoll_wait) the loop allocates nothing
  * (STYLE.md rule 5; tests/python/test_live_no_alloc.py proves it under an
  * allocation-counting LD_PRELOAD): messages are encoded and decoded by
@@ -387,7 +390,7 @@ static void save_done(live_t *L) {
         fprintf(stderr, "loadidd: saved %s\n", path);
 }
 
-enum { TAG_LCM = 1, TAG_CAN, TAG_FILE, TAG_TICK, TAG_SIGNAL, TAG_FT };
+enum { TAG_LCM = 1, TAG_CAN, TAG_FILE, TAG_TICK, TAG_SIGNAL, TAG_FT, TAG_REFINED };
 
 int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     const loadid_live_options_t *opt) {
@@ -475,6 +478,16 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         fprintf(stderr, "loadidd: cannot set up the event loop: %s\n", strerror(errno));
         rc = 1;
     }
+    /* REFINED on its worker thread, created with the signals blocked (so
+     * that they reach the signalfd only) and before the real-time set-up. */
+    if (rc == 0) {
+        const int refined_fd = loadid_pipeline_refined_async(L.pipe);
+        if (refined_fd != -ENOENT && (refined_fd < 0 || add_fd(ep, refined_fd, TAG_REFINED) != 0)) {
+            fprintf(stderr, "loadidd: cannot start REFINED's worker: %s\n",
+                    strerror(refined_fd < 0 ? -refined_fd : errno));
+            rc = 1;
+        }
+    }
     if (rc == 0 && cfg->sensor_type == LOADID_SENSOR_MODBUS) {
         if (opt->can_file) {
             fprintf(stderr, "loadidd: --can-file replays JR3 frames; sensor.type is modbus\n");
@@ -561,10 +574,12 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     }
                     break;
                 case TAG_SIGNAL: stop = 1; break;
+                case TAG_REFINED: loadid_pipeline_refined_collect(L.pipe); break;
             }
             if (timed) record_loop_time(&L, mono_us() - t_event);
         }
-        if (L.done_pending) save_done(&L);
+        /* The model and the saved result wait for REFINED, which may be the best. */
+        if (L.done_pending && !loadid_pipeline_refined_pending(L.pipe)) save_done(&L);
         if (stop) break;
     }
     loadid_notify_stopping();

@@ -11,6 +11,7 @@
 #include "loadid/core.h"
 #include "loadid/jr3.h"
 #include "loadid/setup.h"
+#include "worker.h"
 
 #define MIN_ZEROING_SAMPLES 10
 #define PENDING_MAX 512 /* samples waiting for joint data (and the fixed lag): 0.5 s at 1 kHz */
@@ -43,6 +44,11 @@ struct loadid_pipeline {
     loadid_refined_t *refined;
     loadid_refined_report_t refined_rep;
     int refined_ran;
+    /* Live: REFINED on a worker thread (loadid_pipeline_refined_async);
+     * the job's inputs and result. */
+    loadid_worker_t *worker;
+    double job_channel[LOADID_NOISE_CHANNELS];
+    int job_src, job_rc;
     /* completeness of the last run */
     int zero_seen;
     int complete;
@@ -87,6 +93,7 @@ struct loadid_pipeline {
 };
 
 static void flush_pending(loadid_pipeline_t *p, int64_t before, int ready);
+static int refined_busy(loadid_pipeline_t *p);
 
 static void note(loadid_pipeline_t *p, const char *fmt, ...) {
     if (!p->sink.log) return;
@@ -181,6 +188,7 @@ void loadid_pipeline_destroy(loadid_pipeline_t *p) {
     loadid_signals_destroy(p->sig);
     loadid_jr3_decoder_destroy(p->jr3);
     loadid_kin_destroy(p->kin);
+    loadid_worker_destroy(p->worker); /* before what its job uses */
     loadid_refined_destroy(p->refined);
     free(p);
 }
@@ -284,8 +292,9 @@ static void estimate_of(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t 
 
 static void publish_all(loadid_pipeline_t *p, int final) {
     for (int m = 0; m < p->num_methods; ++m) {
-        /* REFINED has an estimate only once the window has ended. */
-        if (m == p->refined_m && !final) continue;
+        /* REFINED has an estimate only once the window has ended (and,
+         * on the worker, once its job has been collected). */
+        if (m == p->refined_m && (!final || refined_busy(p))) continue;
         estimate_of(p, m, &p->latest[m], final);
         if (p->sink.estimate) p->sink.estimate(p->sink.ctx, &p->latest[m]);
     }
@@ -331,14 +340,19 @@ static void check_complete(loadid_pipeline_t *p, int64_t utime, int by_stop) {
     snprintf(p->incomplete_reason, sizeof p->incomplete_reason, "%s", why);
 }
 
-static void run_refined(loadid_pipeline_t *p) {
-    double channel[LOADID_NOISE_CHANNELS];
-    const int src = loadid_noise_acc_sigma(&p->noise, MIN_ZEROING_SAMPLES, channel);
-    const int rc = loadid_refined_run(p->refined, &p->cfg, p->has_accel, channel, src, p->g_init,
-                                      p->n_params, p->est[p->refined_m], &p->refined_rep);
+static int refined_busy(loadid_pipeline_t *p) { return p->worker && loadid_worker_busy(p->worker); }
+
+/* REFINED's batch over the window (on the worker, or in line offline). */
+static void refined_job(void *ctx) {
+    loadid_pipeline_t *p = ctx;
+    p->job_rc = loadid_refined_run(p->refined, &p->cfg, p->has_accel, p->job_channel, p->job_src,
+                                   p->g_init, p->n_params, p->est[p->refined_m], &p->refined_rep);
+}
+
+static void refined_noted(loadid_pipeline_t *p) {
     p->refined_ran = 1;
-    if (rc != 0) {
-        note(p, "REFINED: %s", loadid_strerror(rc));
+    if (p->job_rc != 0) {
+        note(p, "REFINED: %s", loadid_strerror(p->job_rc));
         return;
     }
     const loadid_noise_levels_t *l = &p->refined_rep.levels;
@@ -350,18 +364,33 @@ static void run_refined(loadid_pipeline_t *p) {
          p->refined_rep.unexplained[1]);
 }
 
+/* REFINED at DONE: in line, or handed to the worker (its estimate is then
+ * published when the loop collects it). */
+static void run_refined(loadid_pipeline_t *p) {
+    p->job_src = loadid_noise_acc_sigma(&p->noise, MIN_ZEROING_SAMPLES, p->job_channel);
+    memset(&p->latest[p->refined_m], 0, sizeof p->latest[p->refined_m]);
+    if (p->worker && loadid_worker_submit(p->worker) == 0) return;
+    refined_job(p);
+    refined_noted(p);
+}
+
+/* wrench_t and the final estimate: the primary method's physically
+ * consistent model. */
+static void choose_primary(loadid_pipeline_t *p) {
+    p->primary = best_method(p);
+    if (p->primary < 0) return;
+    const loadid_pipeline_estimate_t *e = &p->latest[p->primary];
+    loadid_est_estimate(p->est[p->primary], p->phi_total, NULL); /* the offset, for 16 */
+    for (int i = 0; i < 10; ++i) p->phi_total[i] = (loadid_real_t)e->model_phi[i] + p->distal[i];
+}
+
 static void finish_estimation(loadid_pipeline_t *p, int64_t utime, int by_stop) {
     check_complete(p, utime, by_stop);
     if (!p->complete) note(p, "incomplete: %s", p->incomplete_reason);
     if (p->refined_m >= 0) run_refined(p);
     set_state(p, utime, LOADID_STATE_DONE, "");
     publish_all(p, 1);
-    /* wrench_t uses the primary method's physically consistent model. */
-    p->primary = best_method(p);
-    if (p->primary < 0) return;
-    const loadid_pipeline_estimate_t *e = &p->latest[p->primary];
-    loadid_est_estimate(p->est[p->primary], p->phi_total, NULL); /* the offset, for 16 */
-    for (int i = 0; i < 10; ++i) p->phi_total[i] = (loadid_real_t)e->model_phi[i] + p->distal[i];
+    choose_primary(p);
 }
 
 /* ------------------------------------------------------------- zeroing */
@@ -432,13 +461,42 @@ void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_jo
         memcpy(p->last_q, pos, (size_t)num_joints * sizeof pos[0]);
         p->have_q = 1;
         /* REFINED keeps the joint states on the filters' (regularised) clock. */
-        if (p->refined)
+        if (p->refined && !refined_busy(p))
             loadid_refined_joint(p->refined, loadid_signals_newest_joint_time(p->sig), pos);
         flush_pending(p, INT64_MIN, 1);
     }
 }
 
+/* The worker's REFINED is in: publish it, and let it be the primary when
+ * it is the best. */
+static void collect_refined(loadid_pipeline_t *p) {
+    refined_noted(p);
+    if (p->state != LOADID_STATE_DONE) return;
+    estimate_of(p, p->refined_m, &p->latest[p->refined_m], 1);
+    if (p->sink.estimate) p->sink.estimate(p->sink.ctx, &p->latest[p->refined_m]);
+    choose_primary(p);
+}
+
+int loadid_pipeline_refined_async(loadid_pipeline_t *p) {
+    if (p->refined_m < 0) return -ENOENT;
+    if (!p->worker) {
+        const int rc = loadid_worker_create(refined_job, p, &p->worker);
+        if (rc != 0) return rc;
+    }
+    return loadid_worker_fd(p->worker);
+}
+
+int loadid_pipeline_refined_collect(loadid_pipeline_t *p) {
+    if (!p->worker || !loadid_worker_collect(p->worker)) return 0;
+    collect_refined(p);
+    return 1;
+}
+
+int loadid_pipeline_refined_pending(loadid_pipeline_t *p) { return refined_busy(p); }
+
 static void reset_run(loadid_pipeline_t *p) {
+    /* A new run waits for the last one's REFINED (and publishes it). */
+    if (p->worker && loadid_worker_wait(p->worker)) collect_refined(p);
     for (int m = 0; m < p->num_methods; ++m) loadid_est_reset(p->est[m]);
     p->samples_used = 0;
     p->since_publish = 0;

@@ -46,9 +46,11 @@ def run_session(cfg, recording, *extra):
 
 def live_config(d):
     """The live session's configuration in folder d: loopback LCM, results
-    saved in d/results, SCHED_FIFO 10 with mlockall on CPU 0."""
+    saved in d/results, SCHED_FIFO 10 with mlockall on CPU 0, and REFINED
+    beside the on-line methods (it runs on the daemon's worker thread)."""
     cfg = d / "c.yaml"
     cfg.write_text("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n"
+                   "estimation:\n  methods: [RTLS, RIV, RLS, REFINED]\n"
                    f"results:\n  directory: {d / 'results'}\n"
                    "realtime:\n  priority: 10\n  lock_memory: true\n  cpu: 0\n")
     return cfg
@@ -88,11 +90,12 @@ def test_cli_status_and_reset(session):
 def test_estimates_come_while_estimating_and_at_done(session):
     est = session["estimate"]
     methods = {e["method"] for e in est}
-    assert methods == {3, 2, 1}  # RTLS, RIV, RLS (estimation.methods)
+    assert methods == {3, 2, 1, 6}  # RTLS, RIV, RLS, REFINED (estimation.methods)
     running = [e for e in est if e["state"] == 2]
     final = [e for e in est if e["state"] == 3]
-    assert len(running) >= 3 * 10  # every 100th of 1500 samples, three methods
-    assert len(final) == 3 and all(e["samples"] == 1500 for e in final)
+    assert len(running) >= 3 * 10  # every 100th of 1500 samples, the three on-line methods
+    assert 6 not in {e["method"] for e in running}  # REFINED: once, at DONE
+    assert len(final) == 4 and all(e["samples"] == 1500 for e in final)
     assert all(e["load_name"] == "o1" for e in final)
     rtls = next(e for e in final if e["method"] == 3)
     assert abs(rtls["mass"] - 1.0) < 0.03
@@ -108,7 +111,7 @@ def test_final_estimates_equal_offline(session, recording, tmp_path):
                         "--offline", str(recording)], capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     offline = {o["method"]: o for o in json.loads(r.stdout)}
-    names = {1: "RLS", 2: "RIV", 3: "RTLS"}
+    names = {1: "RLS", 2: "RIV", 3: "RTLS", 6: "REFINED"}
     for e in (e for e in session["estimate"] if e["state"] == 3):
         o = offline[names[e["method"]]]
         assert e["samples"] == o["samples"]
@@ -116,19 +119,19 @@ def test_final_estimates_equal_offline(session, recording, tmp_path):
 
 
 def test_load_model_at_done_equals_offline(session, recording, tmp_path):
-    """One load_model_t on LOADID_MODEL at DONE: the primary method's
-    (RTLS: every group identified, first in estimation.methods), its model
-    as --offline computes it."""
+    """One load_model_t on LOADID_MODEL at DONE, once REFINED is in from the
+    worker: the primary method's (REFINED: every group identified, and ties
+    go to it), its model as --offline computes it."""
     models = session["model"]
     assert len(models) == 1, models
     m = models[0]
-    assert m["method"] == 3 and m["identified"] == 7 and m["load_name"] == "o1"
+    assert m["method"] == 6 and m["identified"] == 7 and m["load_name"] == "o1"
     cfg = tmp_path / "offline.yaml"
     cfg.write_text(re.sub(r"^results:\n(  .*\n)+", "", session["config"].read_text(), flags=re.M))
     r = subprocess.run([program("LOADIDD_EXE"), "--config", str(cfg), "--offline", str(recording)],
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
-    o = next(o for o in json.loads(r.stdout) if o["method"] == "RTLS")
+    o = next(o for o in json.loads(r.stdout) if o["method"] == "REFINED")
     np.testing.assert_allclose(m["phi"], o["model_phi"], rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(m["phi_std"], o["phi_std"], rtol=1e-6)
     assert bool(m["projected"]) == o["projected"]
@@ -156,15 +159,17 @@ def test_compensated_wrench_flows_once_done(session):
 def test_saved_estimate_restarts_wrench_compensation(session, recording, tmp_path):
     """A finished estimate is saved (YAML with a URDF <inertial>); a daemon
     started from it is DONE at once and compensates every sample, with no
-    ZERO or START."""
+    ZERO or START. The primary is REFINED (from the worker), so the
+    estimate saved is REFINED's, saved once it was in."""
     latest = session["results"] / "latest.yaml"
     text = latest.read_text()
-    rtls = next(e for e in session["estimate"] if e["state"] == 3 and e["method"] == 3)
+    best = next(e for e in session["estimate"] if e["state"] == 3 and e["method"] == 6)
     phi = [float(x) for x in re.search(r"^phi: \[(.*)\]$", text, re.M).group(1).split(",")]
-    np.testing.assert_array_equal(phi, rtls["phi"])  # %.17g: exact
-    assert "<inertial>" in text and f'<mass value="{rtls["mass"]:.9g}"/>' in text
+    np.testing.assert_array_equal(phi, best["phi"])  # %.17g: exact
+    assert "<inertial>" in text and f'<mass value="{best["mass"]:.9g}"/>' in text
     cfg = tmp_path / "again.yaml"
-    cfg.write_text(f"lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\nresults:\n  load: {latest}\n")
+    cfg.write_text(f"lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\nresults:\n  load: {latest}\n"
+                   "estimation:\n  methods: [RTLS, RIV, RLS, REFINED]\n")
     again = run_session(cfg, recording, "no-commands")
     assert again["returncode"] == 0, again["stderr"]
     assert "loaded" in again["stderr"]

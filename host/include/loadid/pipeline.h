@@ -187,6 +187,20 @@ int loadid_pipeline_final(const loadid_pipeline_t *p, loadid_pipeline_estimate_t
 int loadid_pipeline_restore(loadid_pipeline_t *p, const loadid_pipeline_estimate_t *est,
                             const loadid_pipeline_compensation_t *comp);
 
+/* Live: REFINED (about 14 ms at DONE) on a worker thread instead of in
+ * the caller's loop. Returns a file descriptor that becomes readable when
+ * a run has ended; the loop then calls loadid_pipeline_refined_collect.
+ * Until then the on-line methods' finals are out, wrench_t uses the best
+ * of them, and loadid_pipeline_final gives that one; REFINED's estimate
+ * comes out when collected, and becomes the primary when it is the best.
+ * A START before that waits for the run. -ENOENT when REFINED is not
+ * configured, or -errno. Call at most once, before the first input. */
+int loadid_pipeline_refined_async(loadid_pipeline_t *p);
+/* 1 when the worker's REFINED run had ended and is now published, else 0. */
+int loadid_pipeline_refined_collect(loadid_pipeline_t *p);
+/* 1 while a REFINED run is on the worker and not yet collected. */
+int loadid_pipeline_refined_pending(loadid_pipeline_t *p);
+
 /* The REFINED run's report (refined.h); -ENODATA when REFINED is not
  * configured or has not run. */
 int loadid_pipeline_refined_report(const loadid_pipeline_t *p, loadid_refined_report_t *out);
