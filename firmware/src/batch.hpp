@@ -48,6 +48,25 @@ public:
         reset();
     }
 
+    // The raw rows are stored: the information matrix is built again with
+    // the new weights (estimate() applies them to the rows itself).
+    int rescale(Real, Real, Real) override {
+        d_ = row_weights(cfg);
+        t_ = col_weights<N>(cfg);
+        excitation_.set_weights(d_, t_);
+        for (int64_t k = 0; k < samples_; ++k) {
+            const Real *src = rows_.get() + static_cast<size_t>(k) * LOADID_NROWS * N1;
+            Regressor<N> A;
+            Vec6 y;
+            for (int i = 0; i < LOADID_NROWS; ++i) {
+                for (int j = 0; j < N; ++j) A(i, j) = src[i * N1 + j];
+                y(i) = src[i * N1 + N];
+            }
+            excitation_.add(A, y);
+        }
+        return 0;
+    }
+
     int update(const Real *a, const Real *, const Real *y) override {
         if (samples_ >= cfg.batch_capacity) return LOADID_E_FULL;
         Real *dst = rows_.get() + static_cast<size_t>(samples_) * LOADID_NROWS * N1;

@@ -151,6 +151,56 @@ extern "C" int loadid_est_set_weights(loadid_est_t *est, const loadid_real_t row
     return 0;
 }
 
+extern "C" int loadid_est_rescale(loadid_est_t *est, loadid_real_t force, loadid_real_t torque,
+                                  loadid_real_t columns) {
+    if (!est || !positive_finite(force) || !positive_finite(torque) || !positive_finite(columns))
+        return -EINVAL;
+    const loadid_est_config_t old = est->cfg;
+    for (int i = 0; i < LOADID_NROWS; ++i) est->cfg.row_sigma[i] *= i < 3 ? force : torque;
+    for (int j = 0; j < est->cfg.n_params; ++j) est->cfg.col_weight[j] *= columns;
+    const int rc = est->rescale(force, torque, columns);
+    if (rc != 0) est->cfg = old;
+    return rc;
+}
+
+extern "C" int loadid_est_residual_scales(const loadid_est_t *est, const loadid_real_t *phi,
+                                          loadid_real_t scales[2]) {
+    if (!est || !scales) return -EINVAL;
+    const int n = est->cfg.n_params;
+    if (phi && !all_finite(phi, n)) return LOADID_E_NONFINITE;
+    const loadid::CovInput in = est->information(nullptr);
+    if (in.samples <= 0) return LOADID_E_NOT_EXCITED;
+    using Vec17 = Eigen::Matrix<Real, Eigen::Dynamic, 1, 0, LOADID_MAX_PARAMS + 1, 1>;
+    using Mat17 = Eigen::Matrix<Real, Eigen::Dynamic, Eigen::Dynamic, 0, LOADID_MAX_PARAMS + 1,
+                                LOADID_MAX_PARAMS + 1>;
+    const Mat17 g = Eigen::Map<const Mat17, 0, Eigen::OuterStride<>>(in.gram, n + 1, n + 1,
+                                                                     Eigen::OuterStride<>(n + 1))
+                        .selfadjointView<Eigen::Lower>();
+    const Mat17 gt = Eigen::Map<const Mat17, 0, Eigen::OuterStride<>>(in.gram_torque, n + 1, n + 1,
+                                                                      Eigen::OuterStride<>(n + 1))
+                         .selfadjointView<Eigen::Lower>();
+    // v: the direction of the weighted column space that phi stands for,
+    // T^-1 [phi; -1] (eq. 36 read backwards); without phi, the weighted
+    // least-squares fit of the same data, T1 x with G_AA x = G_Ay.
+    Vec17 v(n + 1);
+    if (phi) {
+        for (int j = 0; j < n; ++j) v(j) = phi[j] / in.t[j];
+    } else {
+        const Eigen::LDLT<Mat17> ldlt(g.topLeftCorner(n, n));
+        if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return LOADID_E_NOT_EXCITED;
+        v.head(n) = ldlt.solve(g.col(n).head(n)) / in.t[n];  // T1^-1 phi_LS
+    }
+    v(n) = Real(-1) / in.t[n];
+    const Real norm = v.norm();
+    if (!(norm > 0) || !v.allFinite()) return LOADID_E_NOT_EXCITED;
+    v /= norm;
+    const Real all = v.dot(g * v), tq = v.dot(gt * v);
+    const Real rows = Real(3) * Real(in.samples);
+    scales[0] = std::sqrt(std::max(all - tq, Real(0)) / rows);
+    scales[1] = std::sqrt(std::max(tq, Real(0)) / rows);
+    return 0;
+}
+
 extern "C" int loadid_est_update(loadid_est_t *est, const loadid_real_t *A,
                                  const loadid_real_t *C, const loadid_real_t y[6]) {
     if (!est || !A || !y) return -EINVAL;

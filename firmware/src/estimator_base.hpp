@@ -17,6 +17,12 @@ struct loadid_est {
     // cfg's row_sigma and col_weight changed: derive the weights again and
     // reset (loadid_est_set_weights).
     virtual void reweight() = 0;
+    // The force rows' noise level times force, the torque rows' times
+    // torque, the regressor columns' weights times columns, for the samples
+    // already taken as well (loadid_est_rescale; cfg already updated). 0,
+    // -ENOTSUP (the method cannot weigh its past again) or
+    // LOADID_E_NOT_EXCITED.
+    virtual int rescale(loadid_real_t force, loadid_real_t torque, loadid_real_t columns) = 0;
     // Inputs are checked (non-NULL, finite) by the C API before this call;
     // an implementation returns 0 or LOADID_E_FULL without changing state.
     virtual int update(const loadid_real_t *A, const loadid_real_t *C, const loadid_real_t *y) = 0;

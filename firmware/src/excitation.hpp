@@ -39,6 +39,20 @@ public:
         reset();
     }
 
+    // The rows' noise levels times force (rows 0-2) and torque (3-5), the
+    // regressor columns' weights times columns, for what is already in as
+    // well: the force and torque parts of the Gram matrix are kept apart,
+    // so this is exact.
+    void rescale(Real force, Real torque, Real columns) {
+        const Real wf = Real(1) / (force * force), wt = Real(1) / (torque * torque);
+        Vec<N1> c = Vec<N1>::Constant(columns);
+        c(N) = 1;
+        gram_ = c.asDiagonal() * (wf * (gram_ - gram_torque_) + wt * gram_torque_) * c.asDiagonal();
+        gram_torque_ = wt * (c.asDiagonal() * gram_torque_ * c.asDiagonal());
+        for (int i = 0; i < LOADID_NROWS; ++i) d_(i) /= i < 3 ? force : torque;
+        t_.template head<N>() *= columns;
+    }
+
     void add(const Regressor<N> &A, const Vec6 &y, Real forgetting = Real(1)) {
         Eigen::Matrix<Real, LOADID_NROWS, N1, Eigen::RowMajor> W;
         W.template leftCols<N>() = A;

@@ -16,6 +16,8 @@
 // samples at p0 = 1e6).
 #pragma once
 
+#include <cerrno>
+
 #include "estimator_base.hpp"
 #include "excitation.hpp"
 
@@ -47,6 +49,9 @@ public:
         excitation_.reset();
         samples_ = 0;
     }
+
+    // The recursion has folded the past in with its weights.
+    int rescale(Real, Real, Real) override { return -ENOTSUP; }
 
     int update(const Real *a, const Real *c, const Real *y) override {
         const ConstRegressorMap<N> B(a);  // data matrix (A_k, or B_k of RIV)

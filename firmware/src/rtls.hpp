@@ -17,6 +17,7 @@
 // estimate after every sample makes every block one sample long.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 #include "brand_jacobi.hpp"
@@ -59,6 +60,30 @@ public:
         ortho_error_ = 0;
         since_check_ = 0;
         pending_count_ = 0;
+    }
+
+    // Brand's SVD cannot weigh its past again, but M M^T is the
+    // information matrix the excitation gate keeps with its force and
+    // torque parts apart: U and S restart from the eigenproblem of that
+    // matrix re-weighted (which squares the condition number, once), and
+    // Brand's update goes on from there with the new weights.
+    int rescale(Real force, Real torque, Real columns) override {
+        apply_pending();
+        if (init_count_ < cfg.rtls_init_samples || rank_ < N1) return LOADID_E_NOT_EXCITED;
+        d_ = row_weights(cfg);
+        t_ = col_weights<N>(cfg);
+        excitation_.rescale(force, torque, columns);
+        linalg::Square V;
+        linalg::Values l;
+        const MatU G = excitation_.gram().template selfadjointView<Eigen::Lower>();
+        linalg::sym_eigen(linalg::Square(G), V, l);
+        for (int j = 0; j < N1; ++j) {  // ascending eigenvalues: descending s
+            U_.col(j) = V.col(N - j);
+            s_(j) = std::sqrt(std::max(l(N - j), Real(0)));
+        }
+        since_check_ = 0;
+        ortho_error_ = orthogonality_error();
+        return 0;
     }
 
     int update(const Real *a, const Real *, const Real *y) override {

@@ -636,12 +636,111 @@ static void test_condition_number_every_update(void **state) {
     dataset_free(&d);
 }
 
+/* Rows and columns weighted again mid-run (loadid_est_rescale) equal an
+ * estimator weighted so from the first sample: RTLS (its SVD restarted
+ * from the re-weighted information matrix, then Brand's update on) against
+ * TLS_BATCH configured with the new levels, and TLS_BATCH rescaled against
+ * the same. RLS cannot and says so. */
+static void test_rescale_equals_weights_from_the_start(void **state) {
+    (void)state;
+    const dataset_spec_t spec = {.seed = 9, .n_samples = 1500, .n_params = 10, .noise = kNoiseBoth};
+    dataset_t d;
+    assert_int_equal(dataset_make(&spec, &d), 0);
+    const double f = 4.0, t = 0.5, c = 3.0;
+    loadid_est_config_t cfg, fresh_cfg;
+    dataset_config(&spec, LOADID_METHOD_TLS_BATCH, &fresh_cfg);
+    fresh_cfg.max_noise_ratio = 1;
+    for (int i = 0; i < 6; ++i) fresh_cfg.row_sigma[i] *= (loadid_real_t)(i < 3 ? f : t);
+    for (int j = 0; j < 10; ++j) fresh_cfg.col_weight[j] *= (loadid_real_t)c;
+    loadid_real_t ref[10];
+    assert_int_equal(dataset_estimate(&d, &fresh_cfg, ref, NULL), 0);
+    double refd[10];
+    for (int j = 0; j < 10; ++j) refd[j] = ref[j];
+    const loadid_method_t methods[] = {LOADID_METHOD_RTLS, LOADID_METHOD_TLS_BATCH};
+    for (int m = 0; m < 2; ++m) {
+        dataset_config(&spec, methods[m], &cfg);
+        cfg.max_noise_ratio = 1;
+        loadid_est_t *e = NULL;
+        assert_int_equal(loadid_est_create(&cfg, &e), 0);
+        assert_int_equal(dataset_feed(&d, e, 0, 400), 0);
+        assert_int_equal(loadid_est_rescale(e, (loadid_real_t)f, (loadid_real_t)t, (loadid_real_t)c), 0);
+        assert_int_equal(dataset_feed(&d, e, 400, d.n_samples), 0);
+        loadid_real_t phi[10];
+        assert_int_equal(loadid_est_estimate(e, phi, NULL), 0);
+        const double err = max_rel_diff(phi, refd, 10, 1e-3);
+        print_message("%s rescaled after 400 samples vs weighted so from the start: max rel diff %.2e\n",
+                      loadid_method_name(methods[m]), err);
+        assert_true(err < 1e-9);
+        assert_int_equal(loadid_est_rescale(e, 0, 1, 1), -EINVAL);
+        loadid_est_destroy(e);
+    }
+    dataset_config(&spec, LOADID_METHOD_RLS, &cfg);
+    loadid_est_t *rls = NULL;
+    assert_int_equal(loadid_est_create(&cfg, &rls), 0);
+    const loadid_real_t before = cfg.row_sigma[0];
+    assert_int_equal(loadid_est_rescale(rls, 2, 2, 2), -ENOTSUP);
+    (void)before;
+    loadid_est_destroy(rls);
+    dataset_free(&d);
+}
+
+/* loadid_est_residual_scales against the residual computed here from the
+ * raw rows: weighted rows D [A y] T times v = T^-1 [phi; -1] / norm, RMS
+ * over the force and the torque rows, at the LS fit (phi NULL; compared
+ * with LS_BATCH's phi). With the weights from the true noise the figures
+ * are near 1; with the force noise configured 3x too small, the force
+ * figure is near 3 and the torque's stays near 1. */
+static void test_residual_scales(void **state) {
+    (void)state;
+    const dataset_spec_t spec = {.seed = 3, .n_samples = 1500, .n_params = 10, .noise = kNoiseBoth};
+    dataset_t d;
+    assert_int_equal(dataset_make(&spec, &d), 0);
+    for (int wrong = 0; wrong < 2; ++wrong) {
+        loadid_est_config_t cfg;
+        dataset_config(&spec, LOADID_METHOD_TLS_BATCH, &cfg);
+        if (wrong)
+            for (int i = 0; i < 3; ++i) cfg.row_sigma[i] /= 3;
+        loadid_est_t *e = NULL;
+        assert_int_equal(loadid_est_create(&cfg, &e), 0);
+        assert_int_equal(dataset_feed(&d, e, 0, d.n_samples), 0);
+        loadid_real_t phi[10], sc[2];
+        loadid_est_config_t ls_cfg = cfg;
+        ls_cfg.method = LOADID_METHOD_LS_BATCH;
+        ls_cfg.p0 = 1e12; /* LS_BATCH's prior ridge, negligible */
+        assert_int_equal(dataset_estimate(&d, &ls_cfg, phi, NULL), 0);
+        assert_int_equal(loadid_est_residual_scales(e, NULL, sc), 0);
+        double v[11], nv = 0, ss[2] = {0, 0};
+        for (int j = 0; j < 10; ++j) v[j] = (double)phi[j] / (double)cfg.col_weight[j];
+        v[10] = -1.0 / (double)cfg.col_weight[10];
+        for (int j = 0; j < 11; ++j) nv += v[j] * v[j];
+        for (int j = 0; j < 11; ++j) v[j] /= sqrt(nv);
+        for (int k = 0; k < d.n_samples; ++k)
+            for (int r = 0; r < 6; ++r) {
+                double z = 0;
+                for (int j = 0; j < 10; ++j) z += (double)dataset_A(&d, k)[r * 10 + j] * (double)cfg.col_weight[j] * v[j];
+                z += (double)dataset_y(&d, k)[r] * (double)cfg.col_weight[10] * v[10];
+                z /= (double)cfg.row_sigma[r];
+                ss[r / 3] += z * z;
+            }
+        const double ref_f = sqrt(ss[0] / (3.0 * d.n_samples)), ref_t = sqrt(ss[1] / (3.0 * d.n_samples));
+        print_message("%s weights: residual scales force %.4f torque %.4f (here %.4f %.4f)\n",
+                      wrong ? "force 3x too small" : "true", (double)sc[0], (double)sc[1], ref_f, ref_t);
+        assert_true(fabs((double)sc[0] - ref_f) < 1e-7 * ref_f && fabs((double)sc[1] - ref_t) < 1e-7 * ref_t);
+        if (wrong) assert_true(sc[0] > 2.4 && sc[0] < 3.6 && sc[1] > 0.8 && sc[1] < 1.25);
+        else assert_true(sc[0] > 0.8 && sc[0] < 1.25 && sc[1] > 0.8 && sc[1] < 1.25);
+        loadid_est_destroy(e);
+    }
+    dataset_free(&d);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_exact_data_every_method),
         cmocka_unit_test(test_rls_equals_batch_ls_with_noise_in_y),
         cmocka_unit_test(test_rtls_equals_batch_tls_every_update),
         cmocka_unit_test(test_condition_number_every_update),
+        cmocka_unit_test(test_rescale_equals_weights_from_the_start),
+        cmocka_unit_test(test_residual_scales),
         cmocka_unit_test(test_rtls_equals_batch_tls_deferred_blocks),
         cmocka_unit_test(test_rtls_equals_batch_tls_three_initial_samples),
         cmocka_unit_test(test_rtls_equals_batch_tls_offset_model),

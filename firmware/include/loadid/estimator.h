@@ -151,6 +151,34 @@ int loadid_est_reset(loadid_est_t *est);
 int loadid_est_set_weights(loadid_est_t *est, const loadid_real_t row_sigma[6],
                            const loadid_real_t *col_weight);
 
+/* Multiplies the noise level of the force rows (row_sigma[0..2]) by force,
+ * of the torque rows by torque, and the regressor columns' weights
+ * (col_weight[0..n-1]) by columns, for the samples already taken as well,
+ * as if configured so from the first: the pipeline's answer to a residual
+ * the measured noise does not explain (loadid_est_residual_scales). RTLS
+ * restarts its SVD from the re-weighted information matrix (one symmetric
+ * eigen-solve, squaring the condition number once); LS_BATCH and TLS_BATCH
+ * are exact. No allocation. Returns 0, -EINVAL (NULL, a factor not finite
+ * and > 0), -ENOTSUP (RLS, RIV: their recursion cannot weigh its past
+ * again) or LOADID_E_NOT_EXCITED (RTLS before its SVD has full rank);
+ * nothing changes unless 0. */
+int loadid_est_rescale(loadid_est_t *est, loadid_real_t force, loadid_real_t torque,
+                       loadid_real_t columns);
+
+/* The weighted residual of phi, RMS per row, force rows (scales[0]) and
+ * torque rows (scales[1]) apart, in the direction of the weighted column
+ * space phi stands for (T^-1 [phi; -1], normalised); phi NULL: of the
+ * weighted least-squares fit of the same data. At a consistent estimate
+ * (the truth, or LS when the columns are nearly exact) each figure is
+ * about 1 when the noise levels behind the weights explain that group's
+ * rows and columns, and s when they carry s times more error than the
+ * levels say. (At a TLS estimate from wrong weights it is not: TLS moves
+ * the error where the weights let it.) Returns 0, -EINVAL,
+ * LOADID_E_NONFINITE or LOADID_E_NOT_EXCITED (no samples, or no LS fit).
+ * No allocation. */
+int loadid_est_residual_scales(const loadid_est_t *est, const loadid_real_t *phi,
+                               loadid_real_t scales[2]);
+
 /* Adds one sample. A: 6 x n_params data matrix (eq. 6, 9 or [A E6]);
  * y: the measured wrench [f; tau] (zeroed for n_params = 10 when the
  * zeroing term is in A). C: RIV instruments, same shape as A (required for
