@@ -69,6 +69,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->duration_s = 1.5;
     cfg->publish_every = 1;
     cfg->max_missing_share = 0.02;
+    cfg->rescale_s = 0.3;
     cfg->zeroing_window_s = 0.2;
 
     cfg->sensor_type = LOADID_SENSOR_JR3;
@@ -471,6 +472,7 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
     }
     TRY(read_number(s, "duration_s", &c->duration_s, POSITIVE));
     TRY(read_int_range(s, "publish_every", &c->publish_every, 1, 1000000));
+    TRY(read_number(s, "rescale_s", &c->rescale_s, NON_NEGATIVE));
     if (read_number(s, "max_missing_share", &c->max_missing_share, NON_NEGATIVE) == 1 &&
         c->max_missing_share > 1)
         return loadid_yaml_fail(loadid_yaml_get(s, "max_missing_share"),

@@ -114,6 +114,10 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
         array(out, e->model_inertia_com, 6);
         fputs("},\n   \"noise\": ", out);
         levels(out, &st->noise);
+        if (e->method == LOADID_METHOD_RTLS || e->method == LOADID_METHOD_TLS_BATCH) {
+            fputs(",\n   \"rescale\": ", out);
+            array(out, st->rescale, 3);
+        }
         if (ref && e->method == LOADID_METHOD_REFINED) {
             fprintf(out, ",\n   \"refined\": {\"samples\": %lld, \"sensor_spec_error\": ",
                     (long long)ref->samples);

@@ -80,6 +80,10 @@ typedef struct {
                                            estimate_t after every n-th sample while
                                            estimating (1, default: every sample);
                                            the final one always; 1..1000000 */
+    double rescale_s;                   /* estimation.rescale_s: (loadid) when, after START,
+                                           the TLS methods weigh their rows again by
+                                           the residual the noise does not explain;
+                                           0: never */
     double max_missing_share;           /* estimation.max_missing_share: (loadid) a
                                            run whose window lost more than this
                                            share of its samples for want of joint

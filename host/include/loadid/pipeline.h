@@ -105,6 +105,9 @@ typedef struct {
                                      data for nearly all of it */
     char incomplete_reason[192];  /* why not, else "" */
     loadid_noise_levels_t noise;  /* the on-line estimators' noise levels */
+    double rescale[3];            /* what RTLS and TLS_BATCH multiplied the force
+                                     rows', torque rows' noise and the columns'
+                                     weights by (estimation.rescale_s); 1 = kept */
 } loadid_pipeline_status_t;
 
 typedef struct {
