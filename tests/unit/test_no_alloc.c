@@ -16,6 +16,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -217,6 +218,12 @@ static int workload_run(workload_t *w) {
         loadid_real_t snr[3];
         if (loadid_est_signal_to_noise(w->est[i], phi, snr) != 0) ++bad;
         if (loadid_load_model(phi, std, snr, &mc, &model) != 0) ++bad;
+        /* estimation.rescale_s: residual scales and the re-weighting. */
+        loadid_real_t sc[2];
+        if (loadid_est_residual_scales(w->est[i], NULL, sc) != 0) ++bad;
+        const loadid_method_t m = loadid_est_config(w->est[i])->method;
+        const int rc_s = loadid_est_rescale(w->est[i], 2, 3, 2);
+        if (m == LOADID_METHOD_RLS || m == LOADID_METHOD_RIV ? rc_s != -ENOTSUP : rc_s != 0) ++bad;
         const loadid_est_config_t *c = loadid_est_config(w->est[i]);
         loadid_real_t rows[6], cols[LOADID_MAX_PARAMS + 1];
         memcpy(rows, c->row_sigma, sizeof rows);
