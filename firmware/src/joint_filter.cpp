@@ -314,6 +314,26 @@ extern "C" int64_t loadid_jf_lagged_time(const loadid_jf_t *jf) {
     return INT64_MIN;
 }
 
+// Updates after ring entry j in its piece, at most lag.
+static int updates_after(const loadid_jf_t *jf, int j, int lag) {
+    const int piece = ring_at(jf, j).piece;
+    int after = 0;
+    while (j + after + 1 < jf->ring_count && after < lag && ring_at(jf, j + after + 1).piece == piece)
+        ++after;
+    return after;
+}
+
+// Joint i's state at ring entry j smoothed with the after updates that
+// follow it: x(j|j-1) + sum_k B_k nu(j+k).
+static void smoothed(const loadid_jf_t *jf, int j, int after, int i, Real x[3]) {
+    const LagEntry &e = ring_at(jf, j);
+    for (int c = 0; c < 3; ++c) x[c] = e.xpred[i][c];
+    for (int k = 0; k <= after; ++k) {
+        const Real nu = ring_at(jf, j + k).nu[i];
+        for (int c = 0; c < 3; ++c) x[c] += jf->gain[k][c] * nu;
+    }
+}
+
 // The newest kept update at or before t serves it: with lag_steps updates
 // after it in its piece, or, in a piece that has ended, with those it had.
 extern "C" int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, int64_t max_age_us,
@@ -338,22 +358,32 @@ extern "C" int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, in
         distance_us(t_us, ring_at(jf, j + 1).t) <= uint64_t(max_age_us))
         ++j;
     const LagEntry &e0 = ring_at(jf, j);
-    int after = 0;  // updates after it in its piece
-    while (j + after + 1 < jf->ring_count && after < lag &&
-           ring_at(jf, j + after + 1).piece == e0.piece)
-        ++after;
+    const int after = updates_after(jf, j, lag);
     if (e0.piece == jf->piece && after < lag) return LOADID_E_NO_DATA;  // not smoothed yet
     if (distance_us(e0.t, t_us) > uint64_t(max_age_us)) return LOADID_E_STALE;
+    // Between two updates of a piece, qdd is interpolated between both
+    // smoothed states (the next one with the updates it has, lag - 1 for
+    // the newest served): held constant from the first, as the model's
+    // mean does, it lags by up to a step, 0.4 ms of jerk (0.16 rad/s^2 RMS
+    // on a 2 Hz multi-sine, four times the smoother's own error).
+    const bool next = j + 1 < jf->ring_count && ring_at(jf, j + 1).piece == e0.piece &&
+                      ring_at(jf, j + 1).t > t_us && t_us >= e0.t;
     const Real dt = seconds(e0.t, t_us), h = dt * dt / 2;
+    const Real w = next ? dt / seconds(e0.t, ring_at(jf, j + 1).t) : Real(0);
+    const int after1 = next ? updates_after(jf, j + 1, lag) : 0;
     for (int i = 0; i < jf->n; ++i) {
-        Real x[3] = {e0.xpred[i][0], e0.xpred[i][1], e0.xpred[i][2]};
-        for (int k = 0; k <= after; ++k) {
-            const Real nu = ring_at(jf, j + k).nu[i];
-            for (int c = 0; c < 3; ++c) x[c] += jf->gain[k][c] * nu;
+        Real x[3], x1[3];
+        smoothed(jf, j, after, i, x);
+        Real a = x[2], jerk = 0;
+        if (next) {
+            smoothed(jf, j + 1, after1, i, x1);
+            a = (1 - w) * x[2] + w * x1[2];
+            jerk = (x1[2] - x[2]) / seconds(e0.t, ring_at(jf, j + 1).t);
         }
-        if (q) q[i] = x[0] + dt * x[1] + h * x[2];
-        if (qd) qd[i] = x[1] + dt * x[2];
-        if (qdd) qdd[i] = x[2];
+        // q and qd: the model's propagation with the interpolated jerk.
+        if (q) q[i] = x[0] + dt * x[1] + h * x[2] + dt * h / 3 * jerk;
+        if (qd) qd[i] = x[1] + dt * x[2] + h * jerk;
+        if (qdd) qdd[i] = a;
     }
     return 0;
 }

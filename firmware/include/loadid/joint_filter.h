@@ -115,7 +115,9 @@ int loadid_jf_end_piece(loadid_jf_t *jf);
  * update at or before t_us (the last 2 LOADID_JF_MAX_LAG + 1 are kept, so a
  * sensor sample that arrives late is still served), with the
  * lag_steps updates after it, or, in a piece that ended at a gap, with
- * those it had; propagated by the model to t_us. Returns 0; -EINVAL (NULL
+ * those it had; between two updates of a piece, qdd interpolated between
+ * their smoothed states (q and qd propagated with that jerk), else
+ * propagated by the model to t_us. Returns 0; -EINVAL (NULL
  * jf, or lag_steps 0); LOADID_E_NO_DATA (nothing yet, or that update has
  * fewer than lag_steps after it and its piece goes on); LOADID_E_STALE
  * (that update is more than max_age_us before t_us, or t_us is before
