@@ -7,13 +7,6 @@
 #include <string.h>
 
 #define JOINT_MARGIN_US 250000 /* joint history smoothed before the window */
-/* The smoothed joints' columns are treated as exact (the mixed LS-TLS
- * limit): their noise is set this far below the smoother's own figure.
- * With that figure itself TLS over-corrected (2.9 % of the mass on the
- * simulated RX60, against 0.3 % for a reference that treats them as
- * exact): the white-jerk model's covariance overstates the error of a
- * smooth 2 Hz motion. */
-#define EXACT_SCALE 1e-3
 
 typedef struct {
     int64_t t;
@@ -178,7 +171,7 @@ static int joints_at(const loadid_refined_t *r, int count, int *k, int64_t t, lo
 static double sq(double v) { return v * v; }
 
 /* The estimator's levels: the wrench rows as given, the smoothed joints'
- * columns EXACT_SCALE of the smoother's own figure (treated as exact). */
+ * columns exact (loadid_noise_weights). */
 static int weigh(loadid_est_t *est, const loadid_noise_levels_t *lv, double omega_rms) {
     loadid_est_config_t ec = *loadid_est_config(est);
     int rc = loadid_noise_weights(lv, fmax(omega_rms, 1e-3), &ec);
@@ -366,13 +359,15 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     loadid_real_t q[LOADID_MAX_JOINTS], qd[LOADID_MAX_JOINTS], qdd[LOADID_MAX_JOINTS];
     int k = 0;
 
-    /* The smoothed joints' own errors at the window's middle pose, scaled
-     * down to "exact". */
+    /* The smoothed joints' own errors at the window's middle pose; as
+     * conditional means, their columns count as exact in the weights
+     * (loadid_noise_weights; with the smoother's own figure TLS
+     * over-corrected 2.9 % of the mass on the simulated RX60). */
     double js = 0, ja = 0, jw = 0;
     if (joints_at(r, r->count, &k, r->s[r->scount / 2].t, q, qd, qdd) == 0)
         loadid_noise_joint_levels(r->kin, q, smooth_sigma[1], smooth_sigma[2], &js, &ja, &jw);
-    loadid_noise_combine(&c, 0, 0, channel, channel_source, fmax(js * EXACT_SCALE, 1e-12),
-                         fmax(ja * EXACT_SCALE, 1e-12), fmax(jw * EXACT_SCALE, 1e-15), &rep->levels);
+    loadid_noise_combine(&c, 0, 0, channel, channel_source, fmax(js, 1e-9),
+                         fmax(ja, 1e-9), fmax(jw, 1e-12), &rep->levels);
 
     /* The rows' noise raised by what of a least-squares fit's residual the
      * wrench's noise does not explain, then the TLS fit. */

@@ -157,12 +157,43 @@ static void test_combine_prefers_configuration(void **state) {
     assert_string_equal(loadid_noise_source_name(LOADID_NOISE_DIFFERENCES), "differences");
 }
 
+/* Columns from the joint filter count as exact: their level enters the
+ * weights as a thousandth of itself; the JR3's and a configured one as
+ * they are. Checked against the column variances written out by hand. */
+static void test_filter_columns_count_as_exact(void **state) {
+    (void)state;
+    loadid_config_t cfg;
+    loadid_config_default(&cfg);
+    double ch[LOADID_NOISE_CHANNELS];
+    memcpy(ch, kSigma, sizeof ch);
+    loadid_noise_levels_t lv;
+    loadid_noise_combine(&cfg, 1, 0, ch, LOADID_NOISE_STILL, 0.3, 2.0, 0.003, &lv); /* mixed */
+    loadid_est_config_t e;
+    assert_int_equal(loadid_est_config_default(LOADID_METHOD_RTLS, 10, &e), 0);
+    const double wt = 1.5;
+    assert_int_equal(loadid_noise_weights(&lv, wt, &e), 0);
+    const double f2 = lv.force * lv.force, t2 = lv.torque * lv.torque, s2 = lv.spec * lv.spec;
+    double b2 = 2e-3 * 2e-3, q = 2 * wt * wt * 3e-6 * 3e-6;
+    /* m: a - g (JR3) in 3 force rows; Ixx: alpha_x and 2 products of omega. */
+    assert_true(fabs(e.col_weight[0] - sqrt(6 / (3 * s2 / f2))) < 1e-12 * e.col_weight[0]);
+    assert_true(fabs(e.col_weight[4] - sqrt(6 / ((b2 + 2 * q) / t2))) < 1e-9 * e.col_weight[4]);
+    /* alpha configured: used as given. */
+    cfg.noise_given = LOADID_NOISE_GIVEN_KF_ALPHA;
+    cfg.kalman_alpha_sigma = 2.0;
+    loadid_noise_combine(&cfg, 1, 0, ch, LOADID_NOISE_STILL, 0.3, 2.0, 0.003, &lv);
+    assert_int_equal(lv.source[3], LOADID_NOISE_CONFIGURED);
+    assert_int_equal(loadid_noise_weights(&lv, wt, &e), 0);
+    b2 = 4.0;
+    assert_true(fabs(e.col_weight[4] - sqrt(6 / ((b2 + 2 * q) / t2))) < 1e-12 * e.col_weight[4]);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_still_window_is_robust),
         cmocka_unit_test(test_third_differences_while_moving),
         cmocka_unit_test(test_joint_levels_by_hand),
         cmocka_unit_test(test_combine_prefers_configuration),
+        cmocka_unit_test(test_filter_columns_count_as_exact),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

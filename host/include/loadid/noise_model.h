@@ -107,7 +107,9 @@ void loadid_noise_combine(const loadid_config_t *cfg, int jr3_spec, int jr3_alph
                           double joint_spec, double joint_alpha, double joint_omega,
                           loadid_noise_levels_t *out);
 
-/* loadid_est_weights_from_noise with these levels. */
+/* loadid_est_weights_from_noise with these levels; a level measured from
+ * the joint filter (LOADID_NOISE_FILTER) enters a thousandth of itself,
+ * so its columns count as exact (noise_model.c says why). */
 int loadid_noise_weights(const loadid_noise_levels_t *lv, double omega_typical,
                          loadid_est_config_t *est);
 
