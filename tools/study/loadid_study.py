@@ -751,13 +751,17 @@ def sim_key(noise_cell):
     return (tuple(sorted(c["sim"].items())), c["vib"])
 
 
-def est_config(robot, noise_cell, methods, signals=None, lag=None) -> str:
+def est_config(robot, noise_cell, methods, signals=None, lag=None, jerk_psd=None) -> str:
     c = NOISE_CELLS[noise_cell]
     text = robot_yaml(robot) + f"estimation:\n  methods: [{', '.join(methods)}]\n"
     if signals:
         text += f"  signals: {signals}\n"
+    if lag is not None or jerk_psd is not None:
+        text += "kalman:\n"
     if lag is not None:
-        text += f"kalman:\n  lag_s: {lag!r}\n"
+        text += f"  lag_s: {lag!r}\n"
+    if jerk_psd is not None:
+        text += f"  jerk_psd: {jerk_psd!r}\n"
     if c["est"] is not None:
         text += "noise:\n" + "".join(f"  {k}: {v!r}\n" for k, v in c["est"].items())
     return text
@@ -1266,6 +1270,9 @@ def main(argv=None) -> int:
     ap.add_argument("--lag", type=float, default=None,
                     help="kalman.lag_s, the on-line fixed-lag smoother's lag (default: the "
                          "configuration's)")
+    ap.add_argument("--jerk-psd", type=float, default=None,
+                    help="kalman.jerk_psd, the on-line joint filter's white-jerk spectral density "
+                         "(default: the configuration's)")
     ap.add_argument("--quick", action="store_true",
                     help="3 seeds, rx60, loads o1 and box, paper noise (options given override)")
     ap.add_argument("--keep", action="store_true",
@@ -1321,7 +1328,7 @@ def main(argv=None) -> int:
         est_cfgs = {}
         for noise in noises:
             p = work / "configs" / f"est-{robot}-{noise}.yaml"
-            p.write_text(est_config(robot, noise, methods, a.signals, a.lag))
+            p.write_text(est_config(robot, noise, methods, a.signals, a.lag, a.jerk_psd))
             est_cfgs[noise] = p
         for load in loads:
             groups = {}
