@@ -717,6 +717,44 @@ static void forward_warning(void *ctx, const char *msg) {
     if (w->fn) w->fn(w->ctx, msg);
 }
 
+/* Unknown keys (config.h): in a section loadid reads, an error; at the top
+ * level, a near miss of a loadid section's name is an error too, and any
+ * other name another program's section, a warning. Errors first (the first
+ * in file order), so that warnings come only with a successful load. */
+typedef struct {
+    const loadid_yaml_node_t *root;
+    const char *file;
+    warn_sink_t *sink;              /* NULL: the error pass */
+    int failed;                     /* the error is in the document */
+} unknown_check_t;
+
+static void check_unknown(void *ctx, const loadid_yaml_unused_t *u) {
+    unknown_check_t *k = ctx;
+    if (k->failed) return;
+    const int top = u->map == k->root;
+    if (!k->sink) {
+        if (u->suggestion) {
+            loadid_yaml_fail(u->key, "unknown %s (did you mean '%s'?)", top ? "section" : "key",
+                             u->suggestion);
+            k->failed = 1;
+        } else if (!top) {
+            char section[512], known[768];
+            loadid_yaml_path(u->map, section, sizeof section);
+            loadid_yaml_known_keys(u->map, known, sizeof known);
+            loadid_yaml_fail(u->key, "unknown key (%s has %s)", section, known);
+            k->failed = 1;
+        }
+        return;
+    }
+    char key[512], line[LOADID_PATH_MAX + 600];
+    loadid_yaml_path(u->key, key, sizeof key);
+    snprintf(line, sizeof line, "%s:%d: %s: not a loadid section, ignored", k->file,
+             loadid_yaml_line(u->key), key);
+    for (char *ch = line; *ch; ++ch)
+        if ((unsigned char)*ch < 0x20 || *ch == 0x7f) *ch = '?'; /* one line */
+    forward_warning(k->sink, line);
+}
+
 int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t errlen,
                        loadid_config_warn_fn warn, void *warn_ctx) {
     if (err && errlen) err[0] = '\0';
@@ -752,7 +790,13 @@ int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t
     TRY(read_sensor_modbus(root, c));
     TRY(read_trajectory(root, c));
     TRY(read_simulation(root, c));
-    loadid_yaml_report_unused(doc, forward_warning, &sink);
+    if (root) {
+        unknown_check_t check = {root, path, NULL, 0};
+        loadid_yaml_each_unused(doc, check_unknown, &check);
+        if (check.failed) goto fail;
+        check.sink = &sink;
+        loadid_yaml_each_unused(doc, check_unknown, &check);
+    }
 
     *cfg = *c;
     free(c);

@@ -7,9 +7,16 @@
  *
  * Every error names the file, the line and the key, e.g.
  *   "cfg.yaml:12: jr3.full_scale.force: expected 3 numbers, got 2"
- * An unknown key is not an error (other programs may share the file) but
- * is reported through the warning callback with its file and line:
- *   "cfg.yaml:40: trajectory.harmonic: unknown key, ignored"
+ * An unknown key inside a section loadid reads is an error, with the
+ * closest known key when one is near (a typo would otherwise leave a
+ * setting silently at its default):
+ *   "cfg.yaml:40: trajectory.harmonic: unknown key (did you mean 'harmonics'?)"
+ *   "cfg.yaml:41: estimation.foo: unknown key (estimation has methods, ...)"
+ * So is a top-level name within the same edit distance of a loadid section
+ * ("estimaton: unknown section (did you mean 'estimation'?)"). Any other
+ * top-level name is another program's section in a shared file: reported
+ * through the warning callback, "cfg.yaml:50: dashboard: not a loadid
+ * section, ignored".
  *
  * Where DESIGN.md is silent:
  *   - An empty file (or one with only comments) gives every default, with a
@@ -275,7 +282,7 @@ void loadid_config_default(loadid_config_t *cfg);
  * "LOADID_WRENCH", "LOADID_STATUS", "LOADID_MODEL"). */
 void loadid_config_channel(const loadid_config_t *cfg, const char *name, char *out, size_t len);
 
-/* Called for each warning (an unknown key); msg is a full line. */
+/* Called for each warning (another program's section); msg is a full line. */
 typedef void (*loadid_config_warn_fn)(void *ctx, const char *msg);
 
 /* Reads path into cfg (defaults first, then the file). Returns 0, or -1
