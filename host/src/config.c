@@ -40,6 +40,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     if (!cfg) return;
     memset(cfg, 0, sizeof *cfg);
     snprintf(cfg->robot_urdf, sizeof cfg->robot_urdf, "%s", LOADID_DEFAULT_URDF);
+    snprintf(cfg->robot_urdf_origin, sizeof cfg->robot_urdf_origin, "robot.urdf (default)");
     snprintf(cfg->robot_base_link, sizeof cfg->robot_base_link, "base_link");
     snprintf(cfg->robot_sensor_link, sizeof cfg->robot_sensor_link, "ft_sensor");
     cfg->robot_gravity[2] = -9.81;
@@ -319,6 +320,8 @@ static int read_robot(loadid_yaml_node_t *root, const char *path, loadid_config_
         TRY(loadid_yaml_as_string(n, urdf, sizeof urdf));
         if (!urdf[0]) return loadid_yaml_fail(n, "must not be empty");
         TRY(resolve_path(n, path, urdf, c->robot_urdf, sizeof c->robot_urdf));
+        snprintf(c->robot_urdf_origin, sizeof c->robot_urdf_origin, "%s:%d: robot.urdf", path,
+                 loadid_yaml_line(n));
     }
     TRY(read_name(s, "base_link", c->robot_base_link, sizeof c->robot_base_link));
     TRY(read_name(s, "sensor_link", c->robot_sensor_link, sizeof c->robot_sensor_link));

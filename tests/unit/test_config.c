@@ -845,6 +845,20 @@ static void other_programs_sections_are_warnings(void **state) {
     assert_string_equal(err, expected);
 }
 
+/* Where robot.urdf was set, for the URDF reader's messages. */
+static void urdf_origin_names_file_line_and_key(void **state) {
+    (void)state;
+    const char *path = write_file("origin.yaml", "# a robot\nrobot:\n  urdf: robots/none.urdf\n");
+    loadid_config_t c;
+    warnings_t w;
+    load_ok(path, &c, &w);
+    char expected[600];
+    snprintf(expected, sizeof expected, "%s:3: robot.urdf", path);
+    assert_string_equal(c.robot_urdf_origin, expected);
+    loadid_config_default(&c);
+    assert_string_equal(c.robot_urdf_origin, "robot.urdf (default)");
+}
+
 static void unreadable_files(void **state) {
     (void)state;
     const char *missing = tmp_path("does_not_exist.yaml");
@@ -1105,6 +1119,7 @@ int main(void) {
         cmocka_unit_test(duplicate_keys),
         cmocka_unit_test(unknown_keys_in_loadid_sections_are_errors),
         cmocka_unit_test(other_programs_sections_are_warnings),
+        cmocka_unit_test(urdf_origin_names_file_line_and_key),
         cmocka_unit_test(unreadable_files),
         cmocka_unit_test(simulation_realism_keys),
         cmocka_unit_test(yaml_tree_nodes_and_lines),

@@ -29,7 +29,8 @@
  *   - Method and source names are case-sensitive, as DESIGN.md spells them.
  *   - robot.urdf is made absolute (a relative config path is taken against
  *     the working directory at load), so it survives a chdir; it is not
- *     checked for existence here (the URDF reader reports that).
+ *     checked for existence here (the URDF reader reports that, after
+ *     robot_urdf_origin: loadid_setup_load).
  *   - A file of several YAML documents, aliases (*name) and duplicate keys
  *     are errors (host/src/yaml_tree.h).
  */
@@ -55,6 +56,9 @@ typedef struct {
     /* robot: (DESIGN.md) */
     char robot_urdf[LOADID_PATH_MAX];   /* resolved path; default: the shipped
                                            host/config/robots/rx60.urdf */
+    char robot_urdf_origin[LOADID_PATH_MAX + 32]; /* where robot_urdf was set, for
+                                           messages about the file: "FILE:LINE:
+                                           robot.urdf", or "robot.urdf (default)" */
     char robot_base_link[LOADID_NAME_MAX];   /* default "base_link" */
     char robot_sensor_link[LOADID_NAME_MAX]; /* default "ft_sensor" */
     double robot_gravity[3];            /* default [0 0 -9.81] */
