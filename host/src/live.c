@@ -521,7 +521,12 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     } else if (rc == 0) {
         L.can_fd = loadid_socketcan_open(cfg->can_interface, cfg->can_base_id, err, sizeof err);
         if (L.can_fd < 0) {
-            fprintf(stderr, "loadidd: %s\n", err);
+            const int absent = L.can_fd == -EAFNOSUPPORT || L.can_fd == -EPROTONOSUPPORT ||
+                               L.can_fd == -ENODEV;
+            fprintf(stderr, "loadidd: %s%s\n", err,
+                    absent ? "; or, without a CAN bus, JR3 frames from a candump log "
+                             "(--can-file CAN.LOG) or a whole recording (--offline DIR)"
+                           : "");
             rc = 1;
         } else {
             add_fd(ep, L.can_fd, TAG_CAN);

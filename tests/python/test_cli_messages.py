@@ -24,3 +24,22 @@ def test_missing_urdf_names_the_key_the_file_and_the_line(tmp_path):
         r = run(*args)
         assert r.returncode == 1, r
         assert expected in r.stderr, r.stderr
+
+
+def test_no_socketcan_says_what_to_do(tmp_path):
+    """The daemon on a CAN interface it cannot open: with SocketCAN absent
+    (this test machine's kernel, as CI's) the modules to load; with
+    SocketCAN present, the interface to create; and the ways without a
+    CAN bus either way."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("lcm:\n  url: memq://\ncan:\n  interface: loadidnone0\n")
+    r = run(program("LOADIDD_EXE"), "--config", cfg, timeout=30)
+    assert r.returncode == 1, r
+    if "Address family not supported" in r.stderr:
+        assert "no CAN socket" in r.stderr
+        assert "'modprobe can_raw'" in r.stderr and "'modprobe vcan'" in r.stderr, r.stderr
+    else:
+        assert "no such interface" in r.stderr, r.stderr
+        assert "'ip link add dev loadidnone0 type vcan" in r.stderr, r.stderr
+    assert "--can-file CAN.LOG" in r.stderr and "--offline DIR" in r.stderr, r.stderr
+    assert len(r.stderr.splitlines()) == 1, r.stderr
