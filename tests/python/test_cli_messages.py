@@ -14,6 +14,29 @@ def run(*args, timeout=60):
                           timeout=timeout, stdin=subprocess.DEVNULL)
 
 
+def test_misspelt_key_is_an_error_with_a_suggestion(tmp_path):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("lcm:\n  url: memq://\nestimation:\n  metods: [RLS]\n")
+    for args in ((program("LOADIDD_EXE"), "--config", cfg, "--offline", tmp_path),
+                 (program("LOADID_CLI_EXE"), "--config", cfg, "status")):
+        r = run(*args)
+        assert r.returncode == 1, r
+        assert f"{cfg}:4: estimation.metods: unknown key (did you mean 'methods'?)" in r.stderr
+    cfg.write_text("lcm:\n  url: memq://\nestimaton:\n  methods: [RLS]\n")
+    r = run(program("LOADID_CLI_EXE"), "--config", cfg, "status")
+    assert r.returncode == 1
+    assert f"{cfg}:3: estimaton: unknown section (did you mean 'estimation'?)" in r.stderr
+
+
+def test_another_programs_section_is_a_warning(tmp_path):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("lcm:\n  url: memq://\ndashboard:\n  port: 8080\n")
+    r = run(program("LOADID_CLI_EXE"), "--config", cfg, "--timeout", "0.2", "status")
+    # the configuration loads (the warning), then no daemon answers on memq://
+    assert f"loadid: warning: {cfg}:3: dashboard: not a loadid section, ignored" in r.stderr
+    assert "status: no answer" in r.stderr and r.returncode == 1, r
+
+
 def test_missing_urdf_names_the_key_the_file_and_the_line(tmp_path):
     cfg = tmp_path / "c.yaml"
     cfg.write_text("# a robot that is not there\nrobot:\n  urdf: robots/none.urdf\n")
