@@ -66,3 +66,38 @@ def test_no_socketcan_says_what_to_do(tmp_path):
         assert "'ip link add dev loadidnone0 type vcan" in r.stderr, r.stderr
     assert "--can-file CAN.LOG" in r.stderr and "--offline DIR" in r.stderr, r.stderr
     assert len(r.stderr.splitlines()) == 1, r.stderr
+
+
+def test_sim_does_not_overwrite_a_recording(tmp_path, trajectory):
+    sim = program("LOADID_SIM_EXE")
+    traj = trajectory / "traj.yaml"
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    r = run(sim, "--trajectory", traj, "--out", empty)  # an empty folder will do
+    assert r.returncode == 0, r.stderr
+    can = (empty / "can.log").read_bytes()
+
+    r = run(sim, "--trajectory", traj, "--out", empty, "--seed", "7")
+    assert r.returncode == 1, r
+    assert f"loadid-sim: --out {empty}: not empty" in r.stderr
+    assert "--force" in r.stderr
+    assert (empty / "can.log").read_bytes() == can  # untouched
+
+    r = run(sim, "--trajectory", traj, "--out", empty, "--seed", "7", "--force")
+    assert r.returncode == 0, r.stderr
+    assert (empty / "can.log").read_bytes() != can  # another seed, written over
+
+    (tmp_path / "file").write_text("x")
+    r = run(sim, "--trajectory", traj, "--out", tmp_path / "file", "--force")
+    assert r.returncode == 1 and "not a directory" in r.stderr, r
+
+
+def test_demo_does_not_overwrite_a_kept_recording(tmp_path):
+    demo = program("LOADID_DEMO_EXE")
+    (tmp_path / "can.log").write_text("x")
+    r = run(demo, "--keep", tmp_path)  # refused before anything is designed
+    assert r.returncode == 1, r
+    assert f"loadid-demo: --keep {tmp_path}: not empty (it holds can.log)" in r.stderr
+    assert (tmp_path / "can.log").read_text() == "x"
+    r = run(demo, "--force")
+    assert r.returncode == 2 and "--force needs --keep" in r.stderr, r
