@@ -199,7 +199,7 @@ int main(int argc, char **argv) {
     /* Subscribed (and liblcm's receive socket open) before the command goes
      * out, so that no answer can come before we listen. */
     wait_t w = {.action = action, .sent = now_us(), .state = -1};
-    loadid_status_t_subscribe(lcm, status, on_status, &w);
+    loadid_status_t_subscription_t *sub = loadid_status_t_subscribe(lcm, status, on_status, &w);
     const int fd = lcm_get_fileno(lcm);
     int rc = 0;
     if (action) {
@@ -207,6 +207,7 @@ int main(int argc, char **argv) {
                               .load_name = (char *)load_name};
         if (loadid_command_t_publish(lcm, command, &m) != 0) {
             fprintf(stderr, "%s: cannot publish on %s at %s\n", prog, command, lcm_url);
+            loadid_status_t_unsubscribe(lcm, sub);
             lcm_destroy(lcm);
             return 1;
         }
@@ -236,6 +237,7 @@ int main(int argc, char **argv) {
                 prog, verb, state_name(w.state), timeout, no_effect_hint(action, w.state));
         rc = 1;
     }
+    loadid_status_t_unsubscribe(lcm, sub);
     lcm_destroy(lcm);
     return rc;
 }

@@ -28,8 +28,10 @@ def main():
     cfg = os.path.join(work, "c.yaml")
     with open(cfg, "w") as f:
         # offset_model estimate: START needs no completed ZERO, so that
-        # start can take effect without sensor data.
-        f.write(f"lcm:\n  url: {URL}\nestimation:\n  offset_model: estimate\n")
+        # start can take effect without sensor data; a window that lasts
+        # until the reset, however slow the machine.
+        f.write(f"lcm:\n  url: {URL}\nestimation:\n  offset_model: estimate\n"
+                "  duration_s: 60\n")
     empty = os.path.join(work, "empty.log")
     open(empty, "w").close()
     runs = []
