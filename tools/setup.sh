@@ -245,7 +245,7 @@ main() {
       build/release/tools/loadid-traj --quiet --monte-carlo 300 --candidates 1 --max-evals 800 \
         --out build/release/bench-trajectory.yaml
       build/release/tools/loadid-sim --trajectory build/release/bench-trajectory.yaml \
-        --out build/release/bench-recording
+        --out build/release/bench-recording --force  # made again on every run
       say "running build/release/tests/bench_pipeline"
       build/release/tests/bench_pipeline host/config/loadid.yaml build/release/bench-recording
       say "running tests/bench/bench_live.py (the live loop in a network namespace; needs root)"

@@ -28,7 +28,13 @@ static int open_bound(const char *ifname, int flags, int (*configure)(int fd, co
     int fd = socket(PF_CAN, SOCK_RAW | flags | SOCK_CLOEXEC, CAN_RAW);
     if (fd < 0) {
         int e = errno;
-        snprintf(err, errlen, "%s: no CAN socket: %s", ifname, strerror(e));
+        /* EAFNOSUPPORT (or EPROTONOSUPPORT): the kernel has SocketCAN as
+         * modules (can, can-raw, vcan) not loaded yet, or has none at all. */
+        snprintf(err, errlen, "%s: no CAN socket: %s%s", ifname, strerror(e),
+                 e == EAFNOSUPPORT || e == EPROTONOSUPPORT
+                     ? " (no SocketCAN in the running kernel: load it with 'modprobe can_raw', "
+                       "and 'modprobe vcan' for a virtual bus)"
+                     : "");
         return -e;
     }
     struct ifreq ifr;
@@ -44,7 +50,13 @@ static int open_bound(const char *ifname, int flags, int (*configure)(int fd, co
              bind(fd, (struct sockaddr *)&addr, sizeof addr) < 0) what = "bind";
     if (what) {
         int e = errno;
-        snprintf(err, errlen, "%s: %s: %s", ifname, what, strerror(e));
+        if (e == ENODEV && !strcmp(what, "no such interface"))
+            snprintf(err, errlen, "%s: %s: %s (a virtual bus: 'ip link add dev %s type vcan && "
+                                  "ip link set up dev %s'; a real one: 'ip link set up dev %s "
+                                  "type can bitrate <bit/s>')",
+                     ifname, what, strerror(e), ifname, ifname, ifname);
+        else
+            snprintf(err, errlen, "%s: %s: %s", ifname, what, strerror(e));
         close(fd);
         return -e;
     }

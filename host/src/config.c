@@ -40,6 +40,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     if (!cfg) return;
     memset(cfg, 0, sizeof *cfg);
     snprintf(cfg->robot_urdf, sizeof cfg->robot_urdf, "%s", LOADID_DEFAULT_URDF);
+    snprintf(cfg->robot_urdf_origin, sizeof cfg->robot_urdf_origin, "robot.urdf (default)");
     snprintf(cfg->robot_base_link, sizeof cfg->robot_base_link, "base_link");
     snprintf(cfg->robot_sensor_link, sizeof cfg->robot_sensor_link, "ft_sensor");
     cfg->robot_gravity[2] = -9.81;
@@ -319,6 +320,8 @@ static int read_robot(loadid_yaml_node_t *root, const char *path, loadid_config_
         TRY(loadid_yaml_as_string(n, urdf, sizeof urdf));
         if (!urdf[0]) return loadid_yaml_fail(n, "must not be empty");
         TRY(resolve_path(n, path, urdf, c->robot_urdf, sizeof c->robot_urdf));
+        snprintf(c->robot_urdf_origin, sizeof c->robot_urdf_origin, "%s:%d: robot.urdf", path,
+                 loadid_yaml_line(n));
     }
     TRY(read_name(s, "base_link", c->robot_base_link, sizeof c->robot_base_link));
     TRY(read_name(s, "sensor_link", c->robot_sensor_link, sizeof c->robot_sensor_link));
@@ -717,6 +720,44 @@ static void forward_warning(void *ctx, const char *msg) {
     if (w->fn) w->fn(w->ctx, msg);
 }
 
+/* Unknown keys (config.h): in a section loadid reads, an error; at the top
+ * level, a near miss of a loadid section's name is an error too, and any
+ * other name another program's section, a warning. Errors first (the first
+ * in file order), so that warnings come only with a successful load. */
+typedef struct {
+    const loadid_yaml_node_t *root;
+    const char *file;
+    warn_sink_t *sink;              /* NULL: the error pass */
+    int failed;                     /* the error is in the document */
+} unknown_check_t;
+
+static void check_unknown(void *ctx, const loadid_yaml_unused_t *u) {
+    unknown_check_t *k = ctx;
+    if (k->failed) return;
+    const int top = u->map == k->root;
+    if (!k->sink) {
+        if (u->suggestion) {
+            loadid_yaml_fail(u->key, "unknown %s (did you mean '%s'?)", top ? "section" : "key",
+                             u->suggestion);
+            k->failed = 1;
+        } else if (!top) {
+            char section[512], known[768];
+            loadid_yaml_path(u->map, section, sizeof section);
+            loadid_yaml_known_keys(u->map, known, sizeof known);
+            loadid_yaml_fail(u->key, "unknown key (%s has %s)", section, known);
+            k->failed = 1;
+        }
+        return;
+    }
+    char key[512], line[LOADID_PATH_MAX + 600];
+    loadid_yaml_path(u->key, key, sizeof key);
+    snprintf(line, sizeof line, "%s:%d: %s: not a loadid section, ignored", k->file,
+             loadid_yaml_line(u->key), key);
+    for (char *ch = line; *ch; ++ch)
+        if ((unsigned char)*ch < 0x20 || *ch == 0x7f) *ch = '?'; /* one line */
+    forward_warning(k->sink, line);
+}
+
 int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t errlen,
                        loadid_config_warn_fn warn, void *warn_ctx) {
     if (err && errlen) err[0] = '\0';
@@ -752,7 +793,13 @@ int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t
     TRY(read_sensor_modbus(root, c));
     TRY(read_trajectory(root, c));
     TRY(read_simulation(root, c));
-    loadid_yaml_report_unused(doc, forward_warning, &sink);
+    if (root) {
+        unknown_check_t check = {root, path, NULL, 0};
+        loadid_yaml_each_unused(doc, check_unknown, &check);
+        if (check.failed) goto fail;
+        check.sink = &sink;
+        loadid_yaml_each_unused(doc, check_unknown, &check);
+    }
 
     *cfg = *c;
     free(c);

@@ -10,6 +10,10 @@
  *     off this loop; samples arrive through a lock-free ring);
  *   - a 10 ms timerfd that ends zeroing and estimation windows on time and
  *     publishes status_t once a second;
+ *   (status_t also goes out at every state change, once the event that made
+ *   it is handled, with the change's time as its utime: a command's change
+ *   carries the command's own utime, which is how the CLI knows the
+ *   acknowledgement of its command, even of a state as short as ZEROING);
  *   - a signalfd for SIGTERM and SIGINT (a clean stop).
  * Estimates go out as estimate_t on LOADID_ESTIMATE, compensated wrenches
  * as wrench_t on LOADID_WRENCH. The loop time, the handling of each input
@@ -98,6 +102,17 @@ typedef struct {
     double loop_max_us;
     int ticks;
     int done_pending;             /* DONE reached: save the estimate */
+    struct {
+        int64_t utime;
+        int8_t state;
+    } changes[8];                 /* states entered since the last event, each
+                                     published as a status_t of its own */
+    int num_changes;
+    struct {
+        int64_t acted, sent;
+    } moved[8];                   /* commands whose utime was too far from now:
+                                     the time they acted at, and their own */
+    int moved_next;
 } live_t;
 
 static int64_t wall_us(void) {
@@ -157,6 +172,11 @@ static void on_state(void *ctx, int64_t utime, int state, const char *reason) {
     live_t *L = ctx;
     static const char *names[] = {"IDLE", "ZEROING", "ESTIMATING", "DONE", "FAILED"};
     if (state == LOADID_STATE_DONE) L->done_pending = 1;
+    /* Published after the event (the pipeline is mid-call here); more
+     * changes than room within one event keep the first ones and the last. */
+    const int k = L->num_changes < 8 ? L->num_changes++ : 7;
+    L->changes[k].utime = utime;
+    L->changes[k].state = (int8_t)state;
     if (L->opt->verbose || state == LOADID_STATE_FAILED)
         fprintf(stderr, "loadidd: %lld: %s%s%s\n", (long long)utime, names[state],
                 *reason ? ": " : "", reason);
@@ -167,8 +187,9 @@ static void on_log(void *ctx, const char *msg) {
     fprintf(stderr, "loadidd: %s\n", msg);
 }
 
-/* p50, p99, max of the loop times since the last status; then cleared. */
-static void loop_stats(live_t *L, double *p50, double *p99, double *max) {
+/* p50, p99, max of the loop times since the last periodic status; then
+ * cleared when periodic. */
+static void loop_stats(live_t *L, int periodic, double *p50, double *p99, double *max) {
     uint64_t n = 0;
     for (int i = 0; i < HIST_BINS; ++i) n += L->hist[i];
     *p50 = *p99 = 0;
@@ -185,17 +206,25 @@ static void loop_stats(live_t *L, double *p50, double *p99, double *max) {
             }
         }
     }
+    if (!periodic) return;
     memset(L->hist, 0, sizeof L->hist);
     L->loop_max_us = 0;
 }
 
-static void publish_status(live_t *L) {
+/* periodic: the 1 Hz status (the loop times' second ends), utime now;
+ * else one at a state change, with the state entered, the change's utime
+ * (a command's own, where the command acted at another: on_command) and
+ * the loop times of the second so far. */
+static void publish_status(live_t *L, int periodic, int state, int64_t utime) {
     loadid_pipeline_status_t st;
     loadid_pipeline_status(L->pipe, &st);
     loadid_lcm_status_t m;
     memset(&m, 0, sizeof m);
-    m.utime = wall_us();
-    m.state = (int8_t)st.state;
+    m.utime = periodic ? wall_us() : utime;
+    if (!periodic)
+        for (int i = 0; i < 8; ++i)
+            if (L->moved[i].acted == utime && utime != 0) m.utime = L->moved[i].sent;
+    m.state = (int8_t)(periodic ? st.state : state);
     m.samples_ok = st.samples_ok;
     m.frames_bad = st.frames_bad + L->error_frames;
     m.samples_incomplete = st.samples_incomplete;
@@ -216,7 +245,7 @@ static void publish_status(live_t *L) {
         m.samples_incomplete += ms.ft.timeouts;
     }
     m.joint_msgs_bad = st.joint_msgs_bad;
-    loop_stats(L, &m.loop_us_p50, &m.loop_us_p99, &m.loop_us_max);
+    loop_stats(L, periodic, &m.loop_us_p50, &m.loop_us_p99, &m.loop_us_max);
     publish(L, channels[CH_STATUS], loadid_lcm_encode_status(&m, tx_buf, sizeof tx_buf));
 }
 
@@ -248,6 +277,11 @@ static void on_command(live_t *L, const uint8_t *data, size_t len) {
      * more than a second away from now (a sender's clock off): then now. */
     const int64_t now = wall_us();
     const int64_t t = m.utime > now - 1000000 && m.utime < now + 1000000 ? m.utime : now;
+    if (t != m.utime) { /* its state change still answers with its own utime */
+        L->moved[L->moved_next].acted = t;
+        L->moved[L->moved_next].sent = m.utime;
+        L->moved_next = (L->moved_next + 1) % 8;
+    }
     loadid_pipeline_command(L->pipe, t, m.action, m.load_name);
 }
 
@@ -521,7 +555,12 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     } else if (rc == 0) {
         L.can_fd = loadid_socketcan_open(cfg->can_interface, cfg->can_base_id, err, sizeof err);
         if (L.can_fd < 0) {
-            fprintf(stderr, "loadidd: %s\n", err);
+            const int absent = L.can_fd == -EAFNOSUPPORT || L.can_fd == -EPROTONOSUPPORT ||
+                               L.can_fd == -ENODEV;
+            fprintf(stderr, "loadidd: %s%s\n", err,
+                    absent ? "; or, without a CAN bus, JR3 frames from a candump log "
+                             "(--can-file CAN.LOG) or a whole recording (--offline DIR)"
+                           : "");
             rc = 1;
         } else {
             add_fd(ep, L.can_fd, TAG_CAN);
@@ -561,7 +600,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     loadid_pipeline_tick(L.pipe, wall_us());
                     loadid_notify_watchdog((int64_t)mono_us());
                     if (++L.ticks % 100 == 0) {
-                        publish_status(&L);
+                        publish_status(&L, 1, 0, 0);
                         if (L.ft) watch_ft(&L);
                         else if (L.can_fd < 0 && !opt->can_file) { /* reopen a vanished interface */
                             L.can_fd = loadid_socketcan_open(cfg->can_interface, cfg->can_base_id,
@@ -578,6 +617,9 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
             }
             if (timed) record_loop_time(&L, mono_us() - t_event);
         }
+        for (int k = 0; k < L.num_changes; ++k)
+            publish_status(&L, 0, L.changes[k].state, L.changes[k].utime);
+        L.num_changes = 0;
         /* The model and the saved result wait for REFINED, which may be the best. */
         if (L.done_pending && !loadid_pipeline_refined_pending(L.pipe)) save_done(&L);
         if (stop) break;
@@ -609,7 +651,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     (long long)ms.ft.device_lost, (long long)ms.ring_overruns,
                     (long long)ms.cycles_missed);
     }
-    publish_status(&L);
+    publish_status(&L, 1, 0, 0);
     loadid_modbus_input_stop(L.ft);
     if (L.can_fd >= 0) close(L.can_fd);
     loadid_candump_reader_close(L.can_reader);

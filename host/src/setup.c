@@ -22,7 +22,9 @@ int loadid_setup_load(const char *prog, const char *config_path, loadid_config_t
     }
     if (loadid_urdf_load_file(cfg->robot_urdf, cfg->robot_base_link, cfg->robot_sensor_link, chain,
                               err, sizeof err) != 0) {
-        fprintf(stderr, "%s: %s\n", prog, err);
+        /* The key and line that named the file: the URDF reader knows
+         * only the file. */
+        fprintf(stderr, "%s: %s: %s\n", prog, cfg->robot_urdf_origin, err);
         return 1;
     }
     return 0;

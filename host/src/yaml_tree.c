@@ -33,6 +33,9 @@ struct loadid_yaml_node {
     loadid_yaml_node_t *parent;   /* NULL for the root */
     const loadid_yaml_node_t *key; /* in a mapping (key and value): the key */
     size_t index;                 /* in a sequence: the item's index */
+    char **asked;                 /* mapping: every key a reader looked up,
+                                     present or not (for "did you mean") */
+    size_t n_asked, cap_asked;
     loadid_yaml_doc_t *doc;
 };
 
@@ -408,6 +411,8 @@ void loadid_yaml_free(loadid_yaml_doc_t *doc) {
     for (size_t i = 0; i < doc->n_all; ++i) {
         free(doc->all[i]->text);
         free(doc->all[i]->child);
+        for (size_t k = 0; k < doc->all[i]->n_asked; ++k) free(doc->all[i]->asked[k]);
+        free(doc->all[i]->asked);
         free(doc->all[i]);
     }
     free(doc->all);
@@ -454,8 +459,20 @@ const char *loadid_yaml_scalar(const loadid_yaml_node_t *node, size_t *len) {
 
 int loadid_yaml_is_null(const loadid_yaml_node_t *node) { return node && is_null_scalar(node); }
 
+/* Remembers key as one a reader knows in map. Out of memory, it is not
+ * remembered: only a suggestion is lost. */
+static void remember_asked(loadid_yaml_node_t *map, const char *key) {
+    for (size_t i = 0; i < map->n_asked; ++i)
+        if (!strcmp(map->asked[i], key)) return;
+    char **room = grow(map->asked, &map->cap_asked, map->n_asked + 1, sizeof *map->asked);
+    if (!room) return;
+    map->asked = room;
+    if ((room[map->n_asked] = strdup(key))) map->n_asked++;
+}
+
 loadid_yaml_node_t *loadid_yaml_get(loadid_yaml_node_t *map, const char *key) {
     if (!map || !key || map->kind != LOADID_YAML_MAPPING) return NULL;
+    remember_asked(map, key);
     const size_t len = strlen(key);
     for (size_t i = 0; i + 1 < map->count; i += 2) {
         if (same_text(map->child[i], key, len)) {
@@ -470,7 +487,63 @@ void loadid_yaml_mark_used(loadid_yaml_node_t *value) {
     if (value) value->used = 1;
 }
 
-static int walk_unused(const loadid_yaml_node_t *n, void (*fn)(void *, const char *), void *ctx) {
+/* Optimal string alignment distance (Levenshtein plus the swap of two
+ * neighbours, the commonest typo: "mehtods"), each edit 1; stops counting
+ * at cap + 1. Bytes, not characters: keys are ASCII in practice. */
+static size_t edit_distance(const char *a, size_t la, const char *b, size_t lb, size_t cap) {
+    enum { MAX = 64 };
+    if (la > MAX || lb > MAX) return cap + 1;
+    if ((la > lb ? la - lb : lb - la) > cap) return cap + 1;
+    size_t d[MAX + 1][MAX + 1];
+    for (size_t i = 0; i <= la; ++i) d[i][0] = i;
+    for (size_t j = 0; j <= lb; ++j) d[0][j] = j;
+    for (size_t i = 1; i <= la; ++i) {
+        for (size_t j = 1; j <= lb; ++j) {
+            size_t best = d[i - 1][j - 1] + (a[i - 1] != b[j - 1]);
+            if (d[i - 1][j] + 1 < best) best = d[i - 1][j] + 1;
+            if (d[i][j - 1] + 1 < best) best = d[i][j - 1] + 1;
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
+                d[i - 2][j - 2] + 1 < best)
+                best = d[i - 2][j - 2] + 1;
+            d[i][j] = best;
+        }
+    }
+    return d[la][lb];
+}
+
+/* How far a name may be from a known one and still be taken for it: one
+ * edit in names of up to 4 characters, two up to 8, three beyond; and
+ * never as many edits as the typed name has characters ("x" is no typo of
+ * "cpu"). */
+static size_t edit_limit(size_t known_len) { return known_len <= 4 ? 1 : known_len <= 8 ? 2 : 3; }
+
+const char *loadid_yaml_suggest(const loadid_yaml_node_t *map, const char *text) {
+    if (!map || !text || map->kind != LOADID_YAML_MAPPING) return NULL;
+    const size_t lt = strlen(text);
+    const char *best = NULL;
+    size_t best_d = SIZE_MAX;
+    for (size_t i = 0; i < map->n_asked; ++i) {
+        const char *k = map->asked[i];
+        const size_t lk = strlen(k), limit = edit_limit(lk);
+        const size_t d = edit_distance(text, lt, k, lk, limit);
+        if (d <= limit && d < lt && d < best_d) best = k, best_d = d;
+    }
+    return best;
+}
+
+size_t loadid_yaml_known_keys(const loadid_yaml_node_t *map, char *buf, size_t len) {
+    size_t pos = 0;
+    if (map && map->kind == LOADID_YAML_MAPPING)
+        for (size_t i = 0; i < map->n_asked; ++i) {
+            if (i > 0) put(buf, len, &pos, ", ", 2);
+            put(buf, len, &pos, map->asked[i], strlen(map->asked[i]));
+        }
+    if (len > 0) buf[pos < len ? pos : len - 1] = '\0';
+    return pos;
+}
+
+static int walk_unused(const loadid_yaml_node_t *n,
+                       void (*fn)(void *, const loadid_yaml_unused_t *), void *ctx) {
     int found = 0;
     if (n->kind == LOADID_YAML_MAPPING) {
         for (size_t i = 0; i + 1 < n->count; i += 2) {
@@ -481,12 +554,8 @@ static int walk_unused(const loadid_yaml_node_t *n, void (*fn)(void *, const cha
             }
             ++found;
             if (fn) {
-                char path[512], msg[1024];
-                loadid_yaml_path(k, path, sizeof path);
-                snprintf(msg, sizeof msg, "%s:%d: %s: unknown key, ignored", n->doc->file, k->line,
-                         path);
-                one_line(msg);
-                fn(ctx, msg);
+                const loadid_yaml_unused_t u = {k, n, loadid_yaml_suggest(n, k->text)};
+                fn(ctx, &u);
             }
         }
     } else if (n->kind == LOADID_YAML_SEQUENCE) {
@@ -495,9 +564,34 @@ static int walk_unused(const loadid_yaml_node_t *n, void (*fn)(void *, const cha
     return found;
 }
 
+int loadid_yaml_each_unused(const loadid_yaml_doc_t *doc,
+                            void (*fn)(void *ctx, const loadid_yaml_unused_t *u), void *ctx) {
+    return doc && doc->root ? walk_unused(doc->root, fn, ctx) : 0;
+}
+
+typedef struct {
+    void (*fn)(void *ctx, const char *msg);
+    void *ctx;
+} report_sink_t;
+
+static void report_one(void *ctx, const loadid_yaml_unused_t *u) {
+    const report_sink_t *r = ctx;
+    char path[512], msg[1024];
+    loadid_yaml_path(u->key, path, sizeof path);
+    if (u->suggestion)
+        snprintf(msg, sizeof msg, "%s:%d: %s: unknown key, ignored (did you mean '%s'?)",
+                 u->key->doc->file, u->key->line, path, u->suggestion);
+    else
+        snprintf(msg, sizeof msg, "%s:%d: %s: unknown key, ignored", u->key->doc->file,
+                 u->key->line, path);
+    one_line(msg);
+    r->fn(r->ctx, msg);
+}
+
 int loadid_yaml_report_unused(const loadid_yaml_doc_t *doc,
                               void (*fn)(void *ctx, const char *msg), void *ctx) {
-    return doc && doc->root ? walk_unused(doc->root, fn, ctx) : 0;
+    report_sink_t r = {fn, ctx};
+    return loadid_yaml_each_unused(doc, fn ? report_one : NULL, &r);
 }
 
 /* --- Typed conversions ---------------------------------------------------- */

@@ -198,6 +198,13 @@ static int timed_run(const loadid_config_t *cfg, const loadid_chain_t *chain, co
 }
 
 int main(int argc, char **argv) {
+    if (argc == 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+        printf("usage: bench_pipeline CONFIG RECORDING_DIR [REPETITIONS]\n"
+               "Times the service's per-sample path over a recording (REPETITIONS runs,\n"
+               "default 20): in memory, as loadidd --offline, the window from START to DONE\n"
+               "and REFINED's cost at DONE; prints the medians and the peak memory.\n");
+        return 0;
+    }
     if (argc < 3) {
         fprintf(stderr, "usage: bench_pipeline CONFIG RECORDING_DIR [REPETITIONS]\n");
         return 2;

@@ -137,6 +137,18 @@ static int bench_robot(const char *path) {
 }
 
 int main(int argc, char **argv) {
+    if (argc == 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+        printf("usage: bench_signals [URDF...]\n"
+               "Times the joint side of the pipeline per sample (Kalman filter banks, forward\n"
+               "kinematics, the signal sources) for each robot given (chains base_link ->\n"
+               "ft_sensor; default the RX60 and the 7-joint test robot) and prints a table.\n");
+        return 0;
+    }
+    for (int i = 1; i < argc; ++i)
+        if (argv[i][0] == '-') {
+            fprintf(stderr, "usage: bench_signals [URDF...] (see --help)\n");
+            return 2;
+        }
     const char *defaults[] = {LOADID_SOURCE_DIR "/host/config/robots/rx60.urdf",
                               LOADID_SOURCE_DIR "/tests/data/urdf/track7.urdf"};
     const char **robots = argc > 1 ? (const char **)argv + 1 : defaults;

@@ -21,6 +21,14 @@
 
 static volatile sig_atomic_t stop;
 
+static void usage(FILE *out) {
+    fprintf(out,
+            "usage: estimate_watch [LCM_URL]\n"
+            "Prints every final estimate_t (DONE or FAILED) on LOADID_ESTIMATE as\n"
+            "'LOADID-ESTIMATE method M state S samples N' until SIGTERM or SIGINT; LCM_URL\n"
+            "defaults to udpm://239.255.76.67:7667?ttl=0.\n");
+}
+
 static void on_signal(int sig) {
     (void)sig;
     stop = 1;
@@ -36,6 +44,14 @@ static void on_estimate(const lcm_recv_buf_t *rbuf, const char *channel,
 }
 
 int main(int argc, char **argv) {
+    if (argc == 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+        usage(stdout);
+        return 0;
+    }
+    if (argc > 2 || (argc == 2 && argv[1][0] == '-')) {
+        usage(stderr);
+        return 2;
+    }
     const char *url = argc > 1 ? argv[1] : "udpm://239.255.76.67:7667?ttl=0";
     lcm_t *lcm = lcm_create(url);
     if (!lcm) {

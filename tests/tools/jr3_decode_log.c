@@ -10,11 +10,19 @@
  * Exit 0, or 1 when the file cannot be read.
  */
 #include <stdio.h>
+#include <string.h>
 
 #include "loadid/candump.h"
 #include "loadid/jr3.h"
 
 int main(int argc, char **argv) {
+    if (argc == 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+        printf("usage: jr3_decode_log CAN.LOG\n"
+               "Decodes a candump log's JR3 frames (base 0x1A0, default full scales): one\n"
+               "line per complete sample (S), per line that is not a frame (B), and the\n"
+               "decoder's counters at the end (T).\n");
+        return 0;
+    }
     if (argc != 2) {
         fprintf(stderr, "usage: jr3_decode_log CAN.LOG\n");
         return 1;

@@ -63,8 +63,20 @@ static int print_frame(const loadid_can_frame_t *f)
     return 0;
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    if (argc == 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+        printf("usage: jr3_encode_log < COMMANDS\n"
+               "Encodes JR3 frames as candump lines (base 0x1A0, default full scales,\n"
+               "vcan0), one command a line on stdin:\n"
+               "  S t_us seq fault_groups v0 .. v11   a sample (SI) -> four lines\n"
+               "  F t_us group fs0 fs1 fs2            a full-scale frame -> one line\n");
+        return 0;
+    }
+    if (argc > 1) {
+        fprintf(stderr, "usage: jr3_encode_log < COMMANDS (see --help)\n");
+        return 2;
+    }
     loadid_jr3_config_t cfg;
     loadid_jr3_config_default(&cfg);
     char line[1024];

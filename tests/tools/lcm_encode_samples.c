@@ -43,8 +43,18 @@ static void print_hex(const char *type, int64_t hash, const unsigned char *buf, 
         free(buf_);                                                                      \
     } while (0)
 
-int main(void)
+int main(int argc, char **argv)
 {
+    if (argc == 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+        printf("usage: lcm_encode_samples\n"
+               "Prints one fixed instance of each loadid LCM type as encoded by lcm-gen's\n"
+               "C code ('<type> <fingerprint> <hex>') and the types' constants.\n");
+        return 0;
+    }
+    if (argc > 1) {
+        fprintf(stderr, "usage: lcm_encode_samples (see --help)\n");
+        return 2;
+    }
     double position[3] = {0.1, -0.2, 0.3};
     double setpoint[3] = {0.11, -0.21, 0.31};
     loadid_joint_state_t js = {.utime = INT64_C(1700000000123456),

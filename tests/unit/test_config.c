@@ -775,41 +775,88 @@ static void duplicate_keys(void **state) {
                  "2: jr3.full_scale.force: duplicate key (first on line 2)");
 }
 
-static void unknown_keys_are_warnings(void **state) {
+/* A key loadid does not know inside one of its sections is a typo that
+ * would leave the setting at its default without a word: an error, with
+ * the closest known key, or the section's keys when none is close. */
+static void unknown_keys_in_loadid_sections_are_errors(void **state) {
     (void)state;
-    const char *path = write_file("unknown.yaml",
+    expect_error("robot:\n  base_link: world\n  sensorlink: tool0\n",
+                 "3: robot.sensorlink: unknown key (did you mean 'sensor_link'?)");
+    /* a swap of two neighbours is one edit */
+    expect_error("estimation:\n  mehtods: [RLS]\n",
+                 "2: estimation.mehtods: unknown key (did you mean 'methods'?)");
+    /* nested sections too, at the key's own line */
+    expect_error("trajectory:\n  workspace:\n    min: [-1, -1, 0]\n    mxa: [1, 1, 1]\n",
+                 "4: trajectory.workspace.mxa: unknown key (did you mean 'max'?)");
+    expect_error("jr3:\n  full_scale:\n    forse: [1, 1, 1]\n",
+                 "3: jr3.full_scale.forse: unknown key (did you mean 'force'?)");
+    /* nothing close: the keys the section has, in the order loadid reads them */
+    expect_error("zeroing:\n  window_s: 0.1\n  duration: 2\n",
+                 "3: zeroing.duration: unknown key (zeroing has window_s)");
+    expect_error("realtime:\n  nice: 5\n",
+                 "2: realtime.nice: unknown key (realtime has priority, lock_memory, cpu)");
+    /* the first in file order, and an error even after valid keys */
+    expect_error("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n  chanel_prefix: R2_\n"
+                 "estimation:\n  duraton_s: 2\n",
+                 "3: lcm.chanel_prefix: unknown key (did you mean 'channel_prefix'?)");
+    /* a misspelt section: a near miss of a loadid section's name */
+    expect_error("estimaton:\n  methods: [RLS]\n",
+                 "1: estimaton: unknown section (did you mean 'estimation'?)");
+    expect_error("kalmann:\n  lag_s: 0\n", "1: kalmann: unknown section (did you mean 'kalman'?)");
+}
+
+/* Any other top-level name is another program's section in a shared
+ * file: a warning, and the rest is read. */
+static void other_programs_sections_are_warnings(void **state) {
+    (void)state;
+    const char *path = write_file("shared.yaml",
                                   "robot:\n"
                                   "  base_link: world\n"
-                                  "  sensorlink: tool0\n"       /* line 3: a typo */
-                                  "dashboard:\n"                /* line 4: another program's */
+                                  "dashboard:\n"                /* line 3: another program's */
                                   "  port: 8080\n"
-                                  "trajectory:\n"
-                                  "  workspace:\n"
-                                  "    min: [-1, -1, 0]\n"
-                                  "    mid: [0, 0, 0.5]\n"      /* line 9 */
+                                  "  robot: x\n"
                                   "estimation:\n"
-                                  "  duration_s: 2\n");
+                                  "  duration_s: 2\n"
+                                  "plotting: true\n");          /* line 8 */
     loadid_config_t c;
     warnings_t w;
     load_ok(path, &c, &w);
-    assert_int_equal(w.count, 3);
+    assert_int_equal(w.count, 2);
     char expected[600];
-    snprintf(expected, sizeof expected, "%s:3: robot.sensorlink: unknown key, ignored", path);
+    snprintf(expected, sizeof expected, "%s:3: dashboard: not a loadid section, ignored", path);
     assert_string_equal(w.msg[0], expected);
-    snprintf(expected, sizeof expected, "%s:4: dashboard: unknown key, ignored", path);
+    snprintf(expected, sizeof expected, "%s:8: plotting: not a loadid section, ignored", path);
     assert_string_equal(w.msg[1], expected);
-    snprintf(expected, sizeof expected, "%s:9: trajectory.workspace.mid: unknown key, ignored", path);
-    assert_string_equal(w.msg[2], expected);
-    /* and the rest was read */
     assert_string_equal(c.robot_base_link, "world");
-    assert_string_equal(c.robot_sensor_link, "ft_sensor");
-    assert_doubles(c.traj_workspace_min, (const double[]){-1, -1, 0}, 3, "workspace.min");
     ASSERT_EQ_D(c.duration_s, 2);
 
     /* No callback: still loads. */
     char err[256] = "x";
     assert_int_equal(loadid_config_load(path, &c, err, sizeof err, NULL, NULL), 0);
     assert_string_equal(err, "");
+
+    /* An error elsewhere: no warning at all (warnings come with success). */
+    const char *bad = write_file("shared_bad.yaml", "dashboard:\n  port: 1\nrobot:\n  urdff: x\n");
+    memset(&w, 0, sizeof w);
+    assert_int_equal(loadid_config_load(bad, &c, err, sizeof err, collect, &w), -1);
+    assert_int_equal(w.count, 0);
+    snprintf(expected, sizeof expected, "%s:4: robot.urdff: unknown key (did you mean 'urdf'?)",
+             bad);
+    assert_string_equal(err, expected);
+}
+
+/* Where robot.urdf was set, for the URDF reader's messages. */
+static void urdf_origin_names_file_line_and_key(void **state) {
+    (void)state;
+    const char *path = write_file("origin.yaml", "# a robot\nrobot:\n  urdf: robots/none.urdf\n");
+    loadid_config_t c;
+    warnings_t w;
+    load_ok(path, &c, &w);
+    char expected[600];
+    snprintf(expected, sizeof expected, "%s:3: robot.urdf", path);
+    assert_string_equal(c.robot_urdf_origin, expected);
+    loadid_config_default(&c);
+    assert_string_equal(c.robot_urdf_origin, "robot.urdf (default)");
 }
 
 static void unreadable_files(void **state) {
@@ -928,6 +975,30 @@ static void yaml_tree_nodes_and_lines(void **state) {
     assert_string_equal(w.msg[0], "t.yaml:3: joints[0].name: unknown key, ignored");
     loadid_yaml_mark_used(loadid_yaml_value_at(j1, 0));
     assert_int_equal(loadid_yaml_report_unused(doc, NULL, NULL), 0);
+
+    /* Suggestions: among the keys asked for in that mapping (present or
+     * not), within 1 edit of a key of up to 4 characters, 2 up to 8, 3
+     * beyond, and fewer edits than the typed name has characters. */
+    assert_null(loadid_yaml_get(root, "cpu"));
+    assert_null(loadid_yaml_get(root, "max_evals"));
+    assert_string_equal(loadid_yaml_suggest(root, "cup"), "cpu");        /* a swap */
+    assert_string_equal(loadid_yaml_suggest(root, "Label"), "label");
+    assert_string_equal(loadid_yaml_suggest(root, "mx_evls"), "max_evals"); /* 2 of 3 */
+    assert_null(loadid_yaml_suggest(root, "x"));   /* 3 edits from cpu: no typo of it */
+    assert_null(loadid_yaml_suggest(root, "cxx")); /* 2 edits of a 3-character key */
+    assert_null(loadid_yaml_get(root, "n"));
+    assert_null(loadid_yaml_suggest(root, "m"));   /* as many edits as characters */
+    assert_string_equal(loadid_yaml_suggest(root, "nn"), "n");
+    assert_null(loadid_yaml_suggest(j1, "cpu"));   /* another mapping's keys */
+    assert_null(loadid_yaml_suggest(NULL, "cpu"));
+    char known[64];
+    assert_int_equal(loadid_yaml_known_keys(j1, known, sizeof known), strlen("coeffs"));
+    assert_string_equal(known, "coeffs");
+    assert_int_equal(loadid_yaml_known_keys(root, known, sizeof known),
+                     strlen("joints, label, flag, nothing, cpu, max_evals, n"));
+    assert_string_equal(known, "joints, label, flag, nothing, cpu, max_evals, n");
+    assert_int_equal(loadid_yaml_known_keys(root, known, 10), 47);
+    assert_string_equal(known, "joints, l"); /* truncated */
     loadid_yaml_free(doc);
 }
 
@@ -1046,7 +1117,9 @@ int main(void) {
         cmocka_unit_test(wrong_lengths_and_values),
         cmocka_unit_test(bad_names),
         cmocka_unit_test(duplicate_keys),
-        cmocka_unit_test(unknown_keys_are_warnings),
+        cmocka_unit_test(unknown_keys_in_loadid_sections_are_errors),
+        cmocka_unit_test(other_programs_sections_are_warnings),
+        cmocka_unit_test(urdf_origin_names_file_line_and_key),
         cmocka_unit_test(unreadable_files),
         cmocka_unit_test(simulation_realism_keys),
         cmocka_unit_test(yaml_tree_nodes_and_lines),

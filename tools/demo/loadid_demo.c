@@ -25,6 +25,7 @@
 #include "loadid/core.h"
 #include "loadid/offline.h"
 #include "loadid/pipeline.h"
+#include "recording_writer.h"
 #include "sim_run.h"
 #include "loadid/setup.h"
 #include "traj_design.h"
@@ -48,7 +49,7 @@ static void distal_phi(double phi[10]) {
 static void usage(FILE *f) {
     fprintf(f,
             "usage: loadid-demo [--seed N] [--offset-model zeroing|estimate]\n"
-            "                   [--signals sensor|kf|setpoint|mixed] [--keep DIR]\n"
+            "                   [--signals sensor|kf|setpoint|mixed] [--keep DIR [--force]]\n"
             "  Designs an excitation trajectory for the RX60, simulates the paper's load o1\n"
             "  on it (JR3 frames, joint states, servo, backlash, noise, vibration), runs\n"
             "  loadidd's pipeline over the recording and prints every method's estimate\n"
@@ -57,7 +58,10 @@ static void usage(FILE *f) {
             "  --offset-model M  zeroing (eqs. 7-9, default) or estimate (16 parameters)\n"
             "  --signals S       signal source (default kf, as the service)\n"
             "  --keep DIR        write the recording (can.log, lcm.log, truth.yaml) to DIR\n"
-            "                    and keep it (default: a temporary folder, removed)\n");
+            "                    and keep it (default: a temporary folder, removed); DIR\n"
+            "                    must not exist or be empty\n"
+            "  --force           write into a --keep DIR that holds files (the recording's\n"
+            "                    three are overwritten)\n");
 }
 
 static void progress(void *ctx, const char *stage, int done, int total, double best) {
@@ -156,10 +160,12 @@ static void print_results(const loadid_config_t *cfg, const loadid_pipeline_esti
 int main(int argc, char **argv) {
     unsigned long long seed = 1;
     const char *keep = NULL, *offset_model = "zeroing", *signals = "kf";
+    int force = 0;
     static const struct option opts[] = {
         {"help", no_argument, NULL, 'h'},       {"offset-model", required_argument, NULL, 'o'},
         {"seed", required_argument, NULL, 's'}, {"signals", required_argument, NULL, 'g'},
-        {"keep", required_argument, NULL, 'k'}, {NULL, 0, NULL, 0},
+        {"keep", required_argument, NULL, 'k'}, {"force", no_argument, NULL, 'f'},
+        {NULL, 0, NULL, 0},
     };
     int c;
     while ((c = getopt_long(argc, argv, "ho:s:g:k:", opts, NULL)) != -1) {
@@ -169,6 +175,7 @@ int main(int argc, char **argv) {
             case 'o': offset_model = optarg; break;
             case 'g': signals = optarg; break;
             case 'k': keep = optarg; break;
+            case 'f': force = 1; break;
             case 's':
                 errno = 0;
                 seed = strtoull(optarg, &end, 10);
@@ -183,6 +190,15 @@ int main(int argc, char **argv) {
     if (optind != argc) {
         fprintf(stderr, "%s: unexpected argument '%s'\n", prog, argv[optind]);
         return 2;
+    }
+    char err[1024];
+    if (force && !keep) {
+        fprintf(stderr, "%s: --force needs --keep DIR\n", prog);
+        return 2;
+    }
+    if (keep && loadid_recording_dir_check(keep, force, "--force", err, sizeof err) != 0) {
+        fprintf(stderr, "%s: --keep %s\n", prog, err);
+        return 1;
     }
     static loadid_config_t cfg;
     loadid_chain_t chain;
@@ -215,7 +231,7 @@ int main(int argc, char **argv) {
     }
     printf("  kappa_set %.4g (weighted data matrix, setpoints at 1 kHz)\n", kappa);
 
-    char tmp[] = "/tmp/loadid-demo-XXXXXX", err[1024];
+    char tmp[] = "/tmp/loadid-demo-XXXXXX";
     const char *dir = keep ? keep : mkdtemp(tmp);
     if (!dir) {
         fprintf(stderr, "%s: cannot make a temporary folder: %s\n", prog, strerror(errno));

@@ -210,7 +210,7 @@ int main(int argc, char **argv)
     bool have_wrench = false, have_fs = false, loop = false, start_on_read = false;
     int slave = 1, c;
     long long epoch_us = 0;
-    while ((c = getopt_long(argc, argv, "", opts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
         switch (c) {
         case 'c': config = optarg; break;
         case 'd': duration = strtod(optarg, NULL); break;

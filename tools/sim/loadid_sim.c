@@ -37,6 +37,7 @@
 #include <string.h>
 
 #include "loadid/config.h"
+#include "recording_writer.h"
 #include "sim_damage.h"
 #include "sim_run.h"
 #include "loadid/setup.h"
@@ -55,7 +56,7 @@ static struct {
 
 static void usage(FILE *out) {
     fprintf(out,
-            "usage: %s --trajectory TRAJ.yaml --out DIR [--config FILE] [--seed N]\n"
+            "usage: %s --trajectory TRAJ.yaml --out DIR [--force] [--config FILE] [--seed N]\n"
             "                  [--load-name NAME] [--start-utime US] [--damage KIND=VALUE]...\n"
             "                  [--values FILE.csv] [--load-phi m,mcx,mcy,mcz,Ixx,Ixy,Ixz,Iyy,Iyz,Izz]\n"
             "Simulates a recording (can.log, lcm.log, truth.yaml in DIR) of the configured\n"
@@ -69,6 +70,8 @@ static void usage(FILE *out) {
             "--damage writes a deliberately damaged recording; KIND is one of\n"
             "  drop-frames=P skip-samples=P bit-errors=P saturate=P fault=P bad-frames=P\n"
             "  nan-joints=P stall-joints=T0:T1 (seconds); may be repeated.\n"
+            "DIR must not exist or be empty; --force writes into a folder that holds files\n"
+            "(can.log, lcm.log and truth.yaml are overwritten, other files stay).\n"
             "--load-phi overrides simulation.load_phi (eq. 5, inertia about the origin of S).\n"
             "--values writes what each CAN sample encodes, in SI (t_us, sequence, f, tau,\n"
             "a - g, alpha), before rounding to counts.\n",
@@ -93,6 +96,7 @@ static int parse_phi(const char *text, double phi[10]) {
 int main(int argc, char **argv) {
     const char *config_path = NULL, *traj_path = NULL, *out_dir = NULL, *load_name = "o1";
     const char *values_path = NULL, *load_phi = NULL;
+    int force = 0;
     long long seed = -1, t0 = 1700000000000000LL;
     loadid_damage_init(&s.damage, 0);
     char err[1024];
@@ -101,7 +105,7 @@ int main(int argc, char **argv) {
         {"out", required_argument, NULL, 'o'},       {"seed", required_argument, NULL, 'S'},
         {"load-name", required_argument, NULL, 'l'}, {"start-utime", required_argument, NULL, 'u'},
         {"damage", required_argument, NULL, 'd'},    {"values", required_argument, NULL, 'v'},
-        {"load-phi", required_argument, NULL, 'p'},
+        {"load-phi", required_argument, NULL, 'p'},  {"force", no_argument, NULL, 'f'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
     int c;
@@ -114,6 +118,7 @@ int main(int argc, char **argv) {
             case 'l': load_name = optarg; break;
             case 'v': values_path = optarg; break;
             case 'p': load_phi = optarg; break;
+            case 'f': force = 1; break;
             case 'S':
             case 'u': {
                 errno = 0;
@@ -139,6 +144,10 @@ int main(int argc, char **argv) {
     if (optind != argc || !traj_path || !out_dir) {
         usage(stderr);
         return 2;
+    }
+    if (loadid_recording_dir_check(out_dir, force, "--force", err, sizeof err) != 0) {
+        fprintf(stderr, "%s: --out %s\n", prog, err);
+        return 1;
     }
     if (loadid_setup_load(prog, config_path, &s.cfg, &s.chain) != 0) return 1;
     if (load_phi && parse_phi(load_phi, s.cfg.sim_load_phi) != 0) {

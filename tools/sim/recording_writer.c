@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "recording_writer.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <lcm/eventlog.h>
 #include <stdlib.h>
@@ -20,6 +21,40 @@ struct loadid_recording_writer {
     int failed;                   /* errno of the first write that failed */
     loadid_recording_counts_t counts;
 };
+
+int loadid_recording_dir_check(const char *dir, int force, const char *force_option, char *err,
+                               size_t errlen) {
+    struct stat st;
+    if (stat(dir, &st) != 0) {
+        if (errno == ENOENT) return 0;
+        const int e = errno;
+        snprintf(err, errlen, "%s: %s", dir, strerror(e));
+        return -e;
+    }
+    if (!S_ISDIR(st.st_mode)) {
+        snprintf(err, errlen, "%s: exists and is not a directory", dir);
+        return -ENOTDIR;
+    }
+    if (force) return 0;
+    DIR *d = opendir(dir);
+    if (!d) {
+        const int e = errno;
+        snprintf(err, errlen, "%s: %s", dir, strerror(e));
+        return -e;
+    }
+    const struct dirent *ent;
+    char first[256] = "";
+    while ((ent = readdir(d)))
+        if (strcmp(ent->d_name, ".") != 0 && strcmp(ent->d_name, "..") != 0) {
+            snprintf(first, sizeof first, "%s", ent->d_name);
+            break;
+        }
+    closedir(d);
+    if (!first[0]) return 0;
+    snprintf(err, errlen, "%s: not empty (it holds %s): give another folder, or %s to write "
+                          "the recording into it", dir, first, force_option);
+    return -EEXIST;
+}
 
 int loadid_recording_open(const char *dir, const char *ifname, loadid_recording_writer_t **out,
                           char *err, size_t errlen) {

@@ -18,6 +18,16 @@ extern "C" {
 
 typedef struct loadid_recording_writer loadid_recording_writer_t; /* opaque */
 
+/* Whether dir may receive a new recording: it does not exist, or is an
+ * empty directory, or force is set and it is a directory (its can.log,
+ * lcm.log and truth.yaml are then overwritten, other files stay). A
+ * recording is data that may have cost a session on the robot: the
+ * programs never overwrite one unasked. Returns 0, -EEXIST (not empty and
+ * not force), -ENOTDIR, or another -errno, with a one-line message in err
+ * that says how to overwrite (force_option, e.g. "--force"). */
+int loadid_recording_dir_check(const char *dir, int force, const char *force_option, char *err,
+                               size_t errlen);
+
 /* Creates dir (if missing) and opens dir/can.log and dir/lcm.log for
  * writing. ifname is the interface named on every can.log line. Returns
  * 0, or -errno with a message in err. */

@@ -17,7 +17,10 @@ extern "C" {
 #endif
 
 /* Opens the socket. Returns the file descriptor (>= 0), or -errno with a
- * one-line reason in err (no such interface, no CAN support, ...). */
+ * one-line reason in err (no such interface, no CAN support, ...), with
+ * what to do about the two common ones: -EAFNOSUPPORT (SocketCAN not
+ * loaded: modprobe can_raw, vcan) and -ENODEV (no such interface: ip link
+ * add ... type vcan). */
 int loadid_socketcan_open(const char *ifname, uint32_t base_id, char *err, size_t errlen);
 
 /* Reads one frame. Returns 1 with *frame filled (t_us: the kernel's

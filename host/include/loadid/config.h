@@ -7,9 +7,16 @@
  *
  * Every error names the file, the line and the key, e.g.
  *   "cfg.yaml:12: jr3.full_scale.force: expected 3 numbers, got 2"
- * An unknown key is not an error (other programs may share the file) but
- * is reported through the warning callback with its file and line:
- *   "cfg.yaml:40: trajectory.harmonic: unknown key, ignored"
+ * An unknown key inside a section loadid reads is an error, with the
+ * closest known key when one is near (a typo would otherwise leave a
+ * setting silently at its default):
+ *   "cfg.yaml:40: trajectory.harmonic: unknown key (did you mean 'harmonics'?)"
+ *   "cfg.yaml:41: estimation.foo: unknown key (estimation has methods, ...)"
+ * So is a top-level name within the same edit distance of a loadid section
+ * ("estimaton: unknown section (did you mean 'estimation'?)"). Any other
+ * top-level name is another program's section in a shared file: reported
+ * through the warning callback, "cfg.yaml:50: dashboard: not a loadid
+ * section, ignored".
  *
  * Where DESIGN.md is silent:
  *   - An empty file (or one with only comments) gives every default, with a
@@ -22,7 +29,8 @@
  *   - Method and source names are case-sensitive, as DESIGN.md spells them.
  *   - robot.urdf is made absolute (a relative config path is taken against
  *     the working directory at load), so it survives a chdir; it is not
- *     checked for existence here (the URDF reader reports that).
+ *     checked for existence here (the URDF reader reports that, after
+ *     robot_urdf_origin: loadid_setup_load).
  *   - A file of several YAML documents, aliases (*name) and duplicate keys
  *     are errors (host/src/yaml_tree.h).
  */
@@ -48,6 +56,9 @@ typedef struct {
     /* robot: (DESIGN.md) */
     char robot_urdf[LOADID_PATH_MAX];   /* resolved path; default: the shipped
                                            host/config/robots/rx60.urdf */
+    char robot_urdf_origin[LOADID_PATH_MAX + 32]; /* where robot_urdf was set, for
+                                           messages about the file: "FILE:LINE:
+                                           robot.urdf", or "robot.urdf (default)" */
     char robot_base_link[LOADID_NAME_MAX];   /* default "base_link" */
     char robot_sensor_link[LOADID_NAME_MAX]; /* default "ft_sensor" */
     double robot_gravity[3];            /* default [0 0 -9.81] */
@@ -275,7 +286,7 @@ void loadid_config_default(loadid_config_t *cfg);
  * "LOADID_WRENCH", "LOADID_STATUS", "LOADID_MODEL"). */
 void loadid_config_channel(const loadid_config_t *cfg, const char *name, char *out, size_t len);
 
-/* Called for each warning (an unknown key); msg is a full line. */
+/* Called for each warning (another program's section); msg is a full line. */
 typedef void (*loadid_config_warn_fn)(void *ctx, const char *msg);
 
 /* Reads path into cfg (defaults first, then the file). Returns 0, or -1

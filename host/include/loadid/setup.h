@@ -18,9 +18,10 @@
 extern "C" {
 #endif
 
-/* cfg from config_path (NULL: the defaults; unknown keys are printed as
- * warnings), then chain from cfg's robot.* keys. Returns 0, or 1 after
- * printing why. */
+/* cfg from config_path (NULL: the defaults; other programs' sections are
+ * printed as warnings), then chain from cfg's robot.* keys (a URDF that
+ * cannot be used is reported after robot_urdf_origin, the file, line and
+ * key that named it). Returns 0, or 1 after printing why. */
 int loadid_setup_load(const char *prog, const char *config_path, loadid_config_t *cfg,
                       loadid_chain_t *chain);
 

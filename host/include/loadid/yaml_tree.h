@@ -37,8 +37,10 @@
  * loadid_yaml_error(). A getter that fails leaves *out unchanged, except
  * for the arrays, whose contents are then unspecified.
  *
- * Lookups mark a key as used; loadid_yaml_report_unused then names every
- * key no reader asked for (an unknown key, or a typo).
+ * Lookups mark a key as used and remember, in each mapping, every key a
+ * reader asked for (present or not); loadid_yaml_report_unused and
+ * loadid_yaml_each_unused then name every key no reader asked for (an
+ * unknown key, or a typo) with the asked-for key closest to it.
  */
 #ifndef LOADID_YAML_TREE_H
 #define LOADID_YAML_TREE_H
@@ -121,7 +123,8 @@ int loadid_yaml_is_null(const loadid_yaml_node_t *node);
 size_t loadid_yaml_path(const loadid_yaml_node_t *node, char *buf, size_t len);
 
 /* The value of key in mapping map, marked as used; NULL when map is NULL,
- * not a mapping, or has no such key. */
+ * not a mapping, or has no such key. Either way map remembers key as one
+ * its reader knows (for loadid_yaml_suggest). */
 loadid_yaml_node_t *loadid_yaml_get(loadid_yaml_node_t *map, const char *key);
 
 /* Marks the value node of a mapping pair as used (for readers that iterate
@@ -138,12 +141,39 @@ int loadid_yaml_fail(const loadid_yaml_node_t *node, const char *fmt, ...)
 #endif
     ;
 
-/* Calls fn(ctx, "FILE:LINE: PATH: unknown key, ignored") for every mapping
- * key, in file order, that no lookup asked for, without descending into
- * its value; values that were used are searched, through sequences too.
- * Returns the number of such keys. */
+/* A key no lookup asked for. */
+typedef struct {
+    const loadid_yaml_node_t *key;   /* the key (a scalar) */
+    const loadid_yaml_node_t *map;   /* the mapping holding it (the root for a
+                                        top-level key) */
+    const char *suggestion;          /* loadid_yaml_suggest(map, key), or NULL */
+} loadid_yaml_unused_t;
+
+/* Calls fn(ctx, &u) for every mapping key, in file order, that no lookup
+ * asked for, without descending into its value; values that were used are
+ * searched, through sequences too. fn may be NULL. Returns the number of
+ * such keys. */
+int loadid_yaml_each_unused(const loadid_yaml_doc_t *doc,
+                            void (*fn)(void *ctx, const loadid_yaml_unused_t *u), void *ctx);
+
+/* The same as one line each: fn(ctx, "FILE:LINE: PATH: unknown key,
+ * ignored"), with " (did you mean 'KEY'?)" after it when a known key is
+ * close. */
 int loadid_yaml_report_unused(const loadid_yaml_doc_t *doc,
                               void (*fn)(void *ctx, const char *msg), void *ctx);
+
+/* Of the keys a reader asked for in mapping map, the one closest to text
+ * by edit distance (insertions, deletions, substitutions and swaps of two
+ * neighbours, 1 each) within 1 edit for a known key of up to 4 characters,
+ * 2 up to 8 and 3 beyond, and fewer edits than text has characters; the
+ * first asked of equally close ones. NULL when none is that close, or map
+ * is not a mapping. The string lives as long as the document. */
+const char *loadid_yaml_suggest(const loadid_yaml_node_t *map, const char *text);
+
+/* The keys a reader asked for in map, in the order asked, joined by ", "
+ * into buf (truncated to len - 1 characters; "" for none). Returns the
+ * untruncated length. */
+size_t loadid_yaml_known_keys(const loadid_yaml_node_t *map, char *buf, size_t len);
 
 /* --- Typed conversions of one node ---------------------------------------- */
 /* Each returns 0, or -EINVAL with "FILE:LINE: PATH: expected ..., got ..."
