@@ -82,7 +82,7 @@ public:
     int estimate(Real *phi, loadid_est_info_t *info) const override {
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
-        const int gate = excitation_gate(excitation_, excitation_.noise_ratio(), cfg, samples_, info);
+        const int gate = excitation_gate(excitation_, excitation_.noise_ratio(col_exact<N>(cfg)), cfg, samples_, info);
         if (gate) return gate;
         if (samples_ < 2) return LOADID_E_NOT_EXCITED;
 

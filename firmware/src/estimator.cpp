@@ -24,7 +24,7 @@ bool valid_config(const loadid_est_config_t &c) {
     for (int i = 0; i < LOADID_NROWS; ++i)
         if (!positive_finite(c.row_sigma[i])) return false;
     for (int j = 0; j <= c.n_params; ++j)
-        if (!positive_finite(c.col_weight[j])) return false;
+        if (!positive_finite(c.col_weight[j]) || !positive_finite(c.col_exact[j])) return false;
     if (!positive_finite(c.p0)) return false;
     if (!(c.forgetting > 0 && c.forgetting <= 1)) return false;
     if (c.rtls_init_samples < 2 || c.rtls_init_samples > 3) return false;
@@ -61,6 +61,7 @@ extern "C" int loadid_est_config_default(loadid_method_t method, int n_params,
     cfg->n_params = n_params;
     for (auto &s : cfg->row_sigma) s = 1;
     for (int j = 0; j <= n_params; ++j) cfg->col_weight[j] = 1;
+    for (int j = 0; j <= LOADID_MAX_PARAMS; ++j) cfg->col_exact[j] = 1;
     cfg->p0 = Real(1e6);
     cfg->forgetting = 1;
     cfg->rtls_init_samples = 2;
@@ -147,6 +148,15 @@ extern "C" int loadid_est_set_weights(loadid_est_t *est, const loadid_real_t row
         if (!positive_finite(col_weight[j])) return -EINVAL;
     for (int i = 0; i < LOADID_NROWS; ++i) est->cfg.row_sigma[i] = row_sigma[i];
     for (int j = 0; j <= est->cfg.n_params; ++j) est->cfg.col_weight[j] = col_weight[j];
+    est->reweight();
+    return 0;
+}
+
+extern "C" int loadid_est_set_exact(loadid_est_t *est, const loadid_real_t *col_exact) {
+    if (!est || !col_exact) return -EINVAL;
+    for (int j = 0; j <= est->cfg.n_params; ++j)
+        if (!positive_finite(col_exact[j])) return -EINVAL;
+    for (int j = 0; j <= est->cfg.n_params; ++j) est->cfg.col_exact[j] = col_exact[j];
     est->reweight();
     return 0;
 }

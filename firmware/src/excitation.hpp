@@ -93,9 +93,15 @@ public:
     // eigenproblem and starts the next from its vectors. On bench_core's
     // recording that is 1 call in 70, and the figure costs about a fifth of
     // the whole eigenproblem.
-    Real condition() const {
+    // exact: loadid_est_config_t's col_exact; the figure is that of
+    // D A (T / exact), the columns weighted by their noise alone.
+    Real condition(const Vec<N1> &exact) const {
+        const Vec<N> inv = exact.template head<N>().cwiseInverse();
         const Eigen::Matrix<Real, N, N> ups =
-            gram_.template topLeftCorner<N, N>().template selfadjointView<Eigen::Lower>();
+            inv.asDiagonal() *
+            Eigen::Matrix<Real, N, N>(
+                gram_.template topLeftCorner<N, N>().template selfadjointView<Eigen::Lower>()) *
+            inv.asDiagonal();
         Real lmin = 0, lmax = 0;
         if (!(warm_ && warm_extremes(ups, lmin, lmax))) {
             linalg::Square v;
@@ -111,9 +117,14 @@ public:
         return std::sqrt(lmax / lmin);
     }
 
-    // sigma_{n+1} / sigma_n of D [A y] T, in [0, 1]; 1 when there is no data.
-    Real noise_ratio() const {
-        const linalg::Square g = gram_;
+    // sigma_{n+1} / sigma_n of D [A y] (T / exact), in [0, 1]; 1 when
+    // there is no data.
+    Real noise_ratio(const Vec<N1> &exact) const {
+        Vec<N1> inv = exact.cwiseInverse();
+        inv(N) = 1;
+        const linalg::Square g = inv.asDiagonal() *
+                                 linalg::Square(gram_.template selfadjointView<Eigen::Lower>()) *
+                                 inv.asDiagonal();
         linalg::Values l;
         linalg::sym_eigenvalues(g, l);
         const Real l0 = std::max(l(0), Real(0)), l1 = l(1);
@@ -218,13 +229,34 @@ inline Vec<N + 1> col_weights(const loadid_est_config_t &cfg) {
     return Eigen::Map<const Vec<N + 1>>(cfg.col_weight);
 }
 
+template <int N>
+inline Vec<N + 1> col_exact(const loadid_est_config_t &cfg) {
+    return Eigen::Map<const Vec<N + 1>>(cfg.col_exact);
+}
+
+// The largest noise ratio the gate lets through after samples. Pure noise
+// in k samples of 6 rows has its n+1 singular values within sqrt(6k) (1 +-
+// gamma), gamma = sqrt((n+1) / 6k) (the Marchenko-Pastur edge), so their
+// adjacent ratio can come near 1 - 2 gamma: the weakest direction must
+// stand out beyond that. RLS and RIV with forgetting remember 1 / (1 -
+// lambda) samples.
+template <int N>
+inline Real noise_ratio_bound(const loadid_est_config_t &cfg, int64_t samples) {
+    Real k = Real(samples);
+    const bool forgets = cfg.method == LOADID_METHOD_RLS || cfg.method == LOADID_METHOD_RIV;
+    if (forgets && cfg.forgetting < 1) k = std::min(k, Real(1) / (Real(1) - cfg.forgetting));
+    const Real gamma = k > 0 ? std::sqrt(Real(N + 1) / (Real(LOADID_NROWS) * k)) : Real(1);
+    return std::min(cfg.max_noise_ratio, Real(1) - Real(2) * gamma);
+}
+
 // The excitation gate shared by every method: fills the info fields it
 // owns and returns 0 or LOADID_E_NOT_EXCITED. ratio is sigma_{n+1}/sigma_n
-// of D [A y] T: Excitation::noise_ratio(), or RTLS's own singular values.
+// of D [A y] (T / col_exact): Excitation::noise_ratio(), or RTLS's from its
+// own singular values.
 template <int N>
 inline int excitation_gate(const Excitation<N> &ex, Real ratio, const loadid_est_config_t &cfg,
                            int64_t samples, loadid_est_info_t *info) {
-    const Real kappa = ex.condition();
+    const Real kappa = ex.condition(col_exact<N>(cfg));
     if (info) {
         *info = loadid_est_info_t{};
         info->samples = samples;
@@ -232,19 +264,8 @@ inline int excitation_gate(const Excitation<N> &ex, Real ratio, const loadid_est
         info->noise_ratio = ratio;
     }
     if (!(kappa <= cfg.max_condition)) return LOADID_E_NOT_EXCITED;
-    if (cfg.max_noise_ratio < 1) {
-        // Pure noise in k samples of 6 rows has its n+1 singular values
-        // within sqrt(6k) (1 +- gamma), gamma = sqrt((n+1) / 6k) (the
-        // Marchenko-Pastur edge), so their adjacent ratio can come near
-        // 1 - 2 gamma: the weakest direction must stand out beyond that.
-        // RLS and RIV with forgetting remember 1 / (1 - lambda) samples.
-        Real k = Real(samples);
-        const bool forgets = cfg.method == LOADID_METHOD_RLS || cfg.method == LOADID_METHOD_RIV;
-        if (forgets && cfg.forgetting < 1) k = std::min(k, Real(1) / (Real(1) - cfg.forgetting));
-        const Real gamma = k > 0 ? std::sqrt(Real(N + 1) / (Real(LOADID_NROWS) * k)) : Real(1);
-        const Real bound = std::min(cfg.max_noise_ratio, Real(1) - Real(2) * gamma);
-        if (!(ratio <= bound)) return LOADID_E_NOT_EXCITED;
-    }
+    if (cfg.max_noise_ratio < 1 && !(ratio <= noise_ratio_bound<N>(cfg, samples)))
+        return LOADID_E_NOT_EXCITED;
     return 0;
 }
 

@@ -68,7 +68,7 @@ public:
     int estimate(Real *phi, loadid_est_info_t *info) const override {
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
-        const int rc = excitation_gate(excitation_, excitation_.noise_ratio(), cfg, samples_, info);
+        const int rc = excitation_gate(excitation_, excitation_.noise_ratio(col_exact<N>(cfg)), cfg, samples_, info);
         if (rc) return rc;
         // RIV keeps M and b (information form): its phi is solved here,
         // when asked for, not after every sample.

@@ -40,16 +40,19 @@ class Rtls final : public loadid_est {
 public:
     explicit Rtls(const loadid_est_config_t &c)
         : loadid_est(c), d_(row_weights(c)), t_(col_weights<N>(c)),
-          excitation_(d_, t_) { reset(); }
+          excitation_(d_, t_),
+          exact_((col_exact<N>(c).template head<N>().array() != Real(1)).any()) { reset(); }
 
     void reweight() override {
         d_ = row_weights(cfg);
         t_ = col_weights<N>(cfg);
+        exact_ = (col_exact<N>(cfg).template head<N>().array() != Real(1)).any();
         excitation_.set_weights(d_, t_);
         reset();
     }
 
     void reset() override {
+        gate_at_ = -1;
         U_.setZero();
         s_.setZero();
         init_.setZero();
@@ -73,6 +76,7 @@ public:
         d_ = row_weights(cfg);
         t_ = col_weights<N>(cfg);
         excitation_.rescale(force, torque, columns);
+        gate_at_ = -1;
         linalg::Square V;
         linalg::Values l;
         const MatU G = excitation_.gram().template selfadjointView<Eigen::Lower>();
@@ -167,10 +171,26 @@ private:
     // sigma_{n+1} / sigma_n from the singular values the update keeps (no
     // second decomposition per estimate): 0 when the data are exact (rank n),
     // 1 when even sigma_n is 0 (nothing stands out, as Excitation has it).
+    // With columns counted as exact (col_exact != 1) the ratio must be that
+    // of the noise's own weights, T / E, which these singular values do
+    // not give: it comes from the excitation's Gram matrix (an 11 x 11
+    // eigen-solve, 2-3 us), on every estimate while the last figure did
+    // not pass the gate, then once per kGateEvery samples (the figure
+    // reported may be that many samples old; with more data it falls, but
+    // for a jump in the data). Exactness then does not make weak data look
+    // excited.
     Real noise_ratio() const {
-        if (rank_ < N) return Real(1);
-        if (rank_ == N) return Real(0);
-        return s_(N) / s_(N - 1);
+        if (!exact_) {
+            if (rank_ < N) return Real(1);
+            if (rank_ == N) return Real(0);
+            return s_(N) / s_(N - 1);
+        }
+        const bool passed = gate_at_ >= 0 && gate_ratio_ <= noise_ratio_bound<N>(cfg, gate_at_);
+        if (gate_at_ < 0 || (samples_ != gate_at_ && (!passed || samples_ - gate_at_ >= kGateEvery))) {
+            gate_ratio_ = excitation_.noise_ratio(col_exact<N>(cfg));
+            gate_at_ = samples_;
+        }
+        return gate_ratio_;
     }
 
     Real rank_tol(Real scale) const { return cfg.rtls_eps * Real(N1) * scale; }
@@ -303,6 +323,11 @@ private:
     mutable int reorth_ = 0;
     mutable Real ortho_error_ = 0;
     mutable int since_check_ = 0;
+    // The noise-ratio gate with exact columns (noise_ratio()).
+    static constexpr int64_t kGateEvery = 64;
+    bool exact_ = false;
+    mutable Real gate_ratio_ = 1;
+    mutable int64_t gate_at_ = -1;
 };
 
 }  // namespace loadid

@@ -185,9 +185,20 @@ int loadid_noise_weights(const loadid_noise_levels_t *lv, double omega_typical,
     double col[3] = {lv->spec, lv->alpha, lv->omega};
     for (int i = 0; i < 3; ++i)
         if (lv->source[2 + i] == LOADID_NOISE_FILTER) col[i] *= FILTER_EXACT_SCALE;
-    return loadid_est_weights_from_noise(est, (loadid_real_t)lv->force, (loadid_real_t)lv->torque,
-                                         (loadid_real_t)col[0], (loadid_real_t)col[1],
-                                         (loadid_real_t)col[2], (loadid_real_t)omega_typical);
+    /* The noise's own weights first, for col_exact (the excitation gates
+     * use those: exactness must not make weak data look excited). */
+    loadid_est_config_t noise = *est;
+    int rc = loadid_est_weights_from_noise(&noise, (loadid_real_t)lv->force,
+                                           (loadid_real_t)lv->torque, (loadid_real_t)lv->spec,
+                                           (loadid_real_t)lv->alpha, (loadid_real_t)lv->omega,
+                                           (loadid_real_t)omega_typical);
+    if (rc == 0)
+        rc = loadid_est_weights_from_noise(est, (loadid_real_t)lv->force, (loadid_real_t)lv->torque,
+                                           (loadid_real_t)col[0], (loadid_real_t)col[1],
+                                           (loadid_real_t)col[2], (loadid_real_t)omega_typical);
+    if (rc != 0) return rc;
+    for (int j = 0; j <= est->n_params; ++j) est->col_exact[j] = est->col_weight[j] / noise.col_weight[j];
+    return 0;
 }
 
 const char *loadid_noise_source_name(int source) {

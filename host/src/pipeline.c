@@ -528,8 +528,9 @@ static void apply_measured_noise(loadid_pipeline_t *p) {
     for (int m = 0; m < p->num_methods; ++m) {
         if (m == p->refined_m) continue; /* weighted by its own run */
         loadid_est_config_t e = *loadid_est_config(p->est[m]);
-        if (loadid_noise_weights(&p->levels, p->cfg.omega_typical, &e) == 0)
-            loadid_est_set_weights(p->est[m], e.row_sigma, e.col_weight);
+        if (loadid_noise_weights(&p->levels, p->cfg.omega_typical, &e) == 0 &&
+            loadid_est_set_weights(p->est[m], e.row_sigma, e.col_weight) == 0)
+            loadid_est_set_exact(p->est[m], e.col_exact);
     }
     /* A configured level the data contradict (by more than 2 either way)
      * is still used, as configured, but said: weights off by a factor

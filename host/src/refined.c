@@ -176,6 +176,7 @@ static int weigh(loadid_est_t *est, const loadid_noise_levels_t *lv, double omeg
     loadid_est_config_t ec = *loadid_est_config(est);
     int rc = loadid_noise_weights(lv, fmax(omega_rms, 1e-3), &ec);
     if (rc == 0) rc = loadid_est_set_weights(est, ec.row_sigma, ec.col_weight);
+    if (rc == 0) rc = loadid_est_set_exact(est, ec.col_exact);
     return rc;
 }
 

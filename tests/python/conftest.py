@@ -128,6 +128,7 @@ class LoadidEstConfig(ctypes.Structure):
         ("batch_capacity", ctypes.c_int),
         ("max_condition", real_t),
         ("max_noise_ratio", real_t),
+        ("col_exact", real_t * (LOADID_MAX_PARAMS + 1)),     # n_params + 1 used
     ]
 
 

@@ -733,6 +733,50 @@ static void test_residual_scales(void **state) {
     dataset_free(&d);
 }
 
+/* col_exact: columns weighted above their noise (counted as exact) change
+ * no excitation figure, as the figures are taken in the noise's own
+ * weights. Uniform exactness 1e3 on every method: condition number and
+ * noise ratio as without it (the same data, T / E); without col_exact the
+ * noise ratio would drop 1000-fold, so the check can fail. Non-uniform
+ * exactness (1 to 100): the same again. */
+static void test_exact_columns_keep_the_excitation_gate(void **state) {
+    (void)state;
+    const dataset_spec_t spec = {.seed = 13, .n_samples = 600, .n_params = 10, .noise = kNoiseBoth};
+    dataset_t d;
+    assert_int_equal(dataset_make(&spec, &d), 0);
+    for (int m = 0; m < NALL; ++m) {
+        loadid_est_config_t cfg;
+        dataset_config(&spec, kAll[m], &cfg);
+        cfg.max_noise_ratio = 1;
+        loadid_real_t phi[10];
+        loadid_est_info_t base, uni, bare, mixed;
+        assert_int_equal(dataset_estimate(&d, &cfg, phi, &base), 0);
+        loadid_est_config_t c = cfg;
+        for (int j = 0; j < 10; ++j) c.col_weight[j] *= 1000, c.col_exact[j] = 1000;
+        assert_int_equal(dataset_estimate(&d, &c, phi, &uni), 0);
+        for (int j = 0; j < 10; ++j) c.col_exact[j] = 1;
+        assert_int_equal(dataset_estimate(&d, &c, phi, &bare), 0);
+        c = cfg;
+        for (int j = 0; j < 10; ++j) {
+            const double e = 1 + 99.0 * j / 9;
+            c.col_weight[j] *= (loadid_real_t)e, c.col_exact[j] = (loadid_real_t)e;
+        }
+        assert_int_equal(dataset_estimate(&d, &c, phi, &mixed), 0);
+        print_message("%-9s kappa %.6g / %.6g (uniform) / %.6g (mixed); noise ratio %.6g / %.6g / "
+                      "%.6g, without col_exact %.3g\n", loadid_method_name(kAll[m]),
+                      (double)base.condition_number, (double)uni.condition_number,
+                      (double)mixed.condition_number, (double)base.noise_ratio,
+                      (double)uni.noise_ratio, (double)mixed.noise_ratio, (double)bare.noise_ratio);
+        const double tol = sizeof(loadid_real_t) == sizeof(float) ? 1e-3 : 1e-7;
+        assert_true(fabs(uni.condition_number / base.condition_number - 1) < tol);
+        assert_true(fabs(uni.noise_ratio / base.noise_ratio - 1) < tol);
+        assert_true(fabs(mixed.condition_number / base.condition_number - 1) < tol);
+        assert_true(bare.noise_ratio < 0.01 * base.noise_ratio);
+        assert_true(fabs(mixed.noise_ratio / base.noise_ratio - 1) < tol);
+    }
+    dataset_free(&d);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_exact_data_every_method),
@@ -740,6 +784,7 @@ int main(void) {
         cmocka_unit_test(test_rtls_equals_batch_tls_every_update),
         cmocka_unit_test(test_condition_number_every_update),
         cmocka_unit_test(test_rescale_equals_weights_from_the_start),
+        cmocka_unit_test(test_exact_columns_keep_the_excitation_gate),
         cmocka_unit_test(test_residual_scales),
         cmocka_unit_test(test_rtls_equals_batch_tls_deferred_blocks),
         cmocka_unit_test(test_rtls_equals_batch_tls_three_initial_samples),

@@ -91,6 +91,14 @@ typedef struct {
      * with noisy accelerometer signals is well conditioned but not
      * excited. In (0, 1]; 1 turns the check off. Default 0.95. */
     loadid_real_t max_noise_ratio;
+    /* How many times each column's weight in col_weight exceeds what its
+     * noise alone gives: > 1 for columns counted as (nearly) exact, the
+     * mixed LS-TLS limit, which changes RTLS's and TLS_BATCH's estimate.
+     * The excitation gates (condition number, noise ratio) take
+     * col_weight / col_exact, so that exactness does not make weak data
+     * look excited. n_params + 1 entries (the last, the wrench column's,
+     * is ignored). Default 1. */
+    loadid_real_t col_exact[LOADID_MAX_PARAMS + 1];
 } loadid_est_config_t;
 
 /* What estimate() reports beside phi. */
@@ -150,6 +158,11 @@ int loadid_est_reset(loadid_est_t *est);
  * changed). */
 int loadid_est_set_weights(loadid_est_t *est, const loadid_real_t row_sigma[6],
                            const loadid_real_t *col_weight);
+
+/* New col_exact (see loadid_est_config_t; n_params + 1 entries), then a
+ * reset, as loadid_est_set_weights. Returns 0, or -EINVAL (NULL, or a
+ * value not finite and > 0: nothing changed). */
+int loadid_est_set_exact(loadid_est_t *est, const loadid_real_t *col_exact);
 
 /* Multiplies the noise level of the force rows (row_sigma[0..2]) by force,
  * of the torque rows by torque, and the regressor columns' weights

@@ -109,7 +109,9 @@ void loadid_noise_combine(const loadid_config_t *cfg, int jr3_spec, int jr3_alph
 
 /* loadid_est_weights_from_noise with these levels; a level measured from
  * the joint filter (LOADID_NOISE_FILTER) enters a thousandth of itself,
- * so its columns count as exact (noise_model.c says why). */
+ * so its columns count as exact (noise_model.c says why), and col_exact
+ * says by how much each column's weight exceeds its noise's (for the
+ * excitation gates; set it with loadid_est_set_exact). */
 int loadid_noise_weights(const loadid_noise_levels_t *lv, double omega_typical,
                          loadid_est_config_t *est);
 
