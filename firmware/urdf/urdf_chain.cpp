@@ -180,6 +180,18 @@ void build_chain(const urdf::ModelInterface &model, const char *base, const char
         throw Fail{LOADID_E_MODEL, "a number on the chain is not finite"};
 }
 
+// urdfdom's links own their children (Link::child_links), so a joint graph
+// with a cycle, which build_chain refuses as a loop, makes links own each
+// other and the model is never freed. Cleared on every way out.
+struct ReleaseLinks {
+    urdf::ModelInterfaceSharedPtr &model;
+    ~ReleaseLinks() {
+        if (!model) return;
+        for (auto &entry : model->links_)
+            if (entry.second) entry.second->clear();
+    }
+};
+
 void report(char *err, size_t errlen, const char *name, const std::string &why) {
     if (err && errlen > 0) std::snprintf(err, errlen, "%s: %s", name, why.c_str());
 }
@@ -200,6 +212,7 @@ extern "C" int loadid_urdf_load_string(const char *xml, const char *name, const 
     int rc = 0;
     try {
         urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(xml);
+        ReleaseLinks release{model};
         if (!model) {
             throw Fail{LOADID_E_MODEL,
                        "not a valid URDF: " +
