@@ -192,8 +192,14 @@ struct ReleaseLinks {
     }
 };
 
+// One line, as the programs print it: urdfdom's messages quote the
+// offending text, and names in the file may hold any character, so control
+// characters (a newline, a tab) become '?', as in the YAML reader's.
 void report(char *err, size_t errlen, const char *name, const std::string &why) {
-    if (err && errlen > 0) std::snprintf(err, errlen, "%s: %s", name, why.c_str());
+    if (!err || errlen == 0) return;
+    std::snprintf(err, errlen, "%s: %s", name, why.c_str());
+    for (char *c = err; *c; ++c)
+        if (static_cast<unsigned char>(*c) < 0x20 || *c == 0x7f) *c = '?';
 }
 
 }  // namespace
