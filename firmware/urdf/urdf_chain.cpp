@@ -217,7 +217,15 @@ extern "C" int loadid_urdf_load_string(const char *xml, const char *name, const 
     console_bridge::useOutputHandler(&capture);
     int rc = 0;
     try {
-        urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(xml);
+        // TinyXML 2.6.2 (urdfdom's parser on Debian 12) steps over a whole
+        // UTF-8 sequence by its lead byte (TiXmlBase::GetChar returns
+        // p + length), so text that ends inside one is read past its NUL,
+        // into whatever memory follows. Four NULs more keep every such step
+        // inside the string; they change nothing else (the text ends at
+        // the first).
+        std::string text(xml);
+        text.append(4, '\0');
+        urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(text);
         ReleaseLinks release{model};
         if (!model) {
             throw Fail{LOADID_E_MODEL,
