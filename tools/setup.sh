@@ -5,7 +5,8 @@
 # directory:
 #   bash tools/setup.sh deps        Debian packages + Python venv (build/venv)
 #   bash tools/setup.sh demo [ARGS] deps, release build, run loadid-demo ARGS
-#   bash tools/setup.sh test        deps, release + asan builds, all ctest tests
+#   bash tools/setup.sh test        deps, release + asan + fuzz builds, all ctest
+#                                   tests (the 30 s fuzzing runs when CI=true)
 #   bash tools/setup.sh bench       deps, release build, run the benchmarks
 #
 # System packages come only from Debian (apt-get), Python packages only from
@@ -18,6 +19,9 @@ set -euo pipefail
 DEBIAN_PACKAGES=(
   # compilers and the build: gcc/g++/make, cmake (presets need >= 3.25), ninja
   build-essential cmake ninja-build pkg-config
+  # the fuzz preset: clang 14, and libFuzzer (libclang_rt.fuzzer), which
+  # clang only recommends
+  clang libclang-rt-14-dev
   # libraries of the estimation core and of the unit tests
   libeigen3-dev libcmocka-dev
   # the robot model: URDF reader (kinematics of the sensor frame)
@@ -67,7 +71,9 @@ commands:
   deps         install missing Debian packages (apt-get) and the Python
                virtual environment build/venv (pinned, tools/requirements.txt)
   demo [ARGS]  deps, build the release preset, run loadid-demo with ARGS
-  test         deps, build the release and asan presets, run every ctest test
+  test         deps, build the release, asan and fuzz presets, run every ctest
+               test; each fuzz target fuzzes 30 s only when CI=true or
+               LOADID_FUZZ_TIME=1 (else its seeds are replayed)
   bench        deps, build the release preset, run bench_core, bench_core_float, bench_signals, bench_pipeline, bench_live
 EOF
 }
@@ -161,39 +167,49 @@ build() { # build PRESET (explicit returns: callers may test it in an `if`)
   "$CMAKE" --build --preset "$1" || return 1
 }
 
-# run_tests PRESET: runs ctest, prints nothing of its own; sets SUMMARY.
+# run_tests PRESET [CTEST ARGS]: runs ctest, prints nothing of its own; sets
+# SUMMARY.
 SUMMARY=
 run_tests() {
-  local log="build/$1/ctest.log" rc=0
-  say "testing $1"
+  local preset=$1 log="build/$1/ctest.log" rc=0
+  shift
+  say "testing $preset"
   # --no-tests=error: a suite that registered no test fails, it does not pass.
-  "$CTEST" --preset "$1" -j2 --output-on-failure --no-tests=error --timeout 900 \
+  "$CTEST" --preset "$preset" -j2 --output-on-failure --no-tests=error --timeout 900 "$@" \
     2>&1 | tee "$log" || rc=$?
   local total failed skipped
   total="$(sed -nE 's/.* tests? failed out of ([0-9]+).*/\1/p' "$log" | tail -n1)"
   failed="$(sed -nE 's/.* ([0-9]+) tests? failed out of.*/\1/p' "$log" | tail -n1)"
   skipped="$(grep -cE '^[[:space:]]+[0-9]+ - .+ \(Skipped\)$' "$log" || true)"
   if [[ -n "$total" && -n "$failed" ]]; then
-    SUMMARY="$1: $((total - failed - skipped)) passed, $failed failed, $skipped skipped"
+    SUMMARY="$preset: $((total - failed - skipped)) passed, $failed failed, $skipped skipped"
     ((rc == 0 && failed == 0))
   else
-    SUMMARY="$1: ctest did not run (exit $rc)"
+    SUMMARY="$preset: ctest did not run (exit $rc)"
     return 1
   fi
 }
 
 cmd_test() {
   deps
-  local -a presets=(release asan) built=() summary=()
+  local -a presets=(release asan fuzz) built=() summary=() args
   local i ok=1
   for i in "${!presets[@]}"; do
     if build "${presets[i]}"; then built[i]=1; else built[i]=0; fi
   done
   for i in "${!presets[@]}"; do
+    args=()
+    # The fuzz preset: every seed is replayed (label fuzz-replay); the
+    # fuzzing itself (label fuzz, 30 s a target, two at a time) in CI, or
+    # when asked for.
+    if [[ "${presets[i]}" == fuzz && "${CI:-}" != true && "${LOADID_FUZZ_TIME:-}" != 1 ]]; then
+      say "fuzz: replaying the seeds only (CI=true or LOADID_FUZZ_TIME=1 fuzzes each target 30 s)"
+      args=(-LE '^fuzz$')
+    fi
     if ((built[i] == 0)); then
       summary+=("${presets[i]}: build failed")
       ok=0
-    elif run_tests "${presets[i]}"; then
+    elif run_tests "${presets[i]}" "${args[@]}"; then
       summary+=("$SUMMARY")
     else
       summary+=("$SUMMARY")

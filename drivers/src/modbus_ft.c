@@ -118,23 +118,27 @@ int loadid_modbus_ft_decode_full_scale(loadid_modbus_ft_decoder_t *dec,
     return LOADID_MODBUS_FT_FULL_SCALE;
 }
 
-/* Half away from zero, clamped to int16; *sat set when clamped. */
+/* Half away from zero, clamped to int16; *sat set when clamped. Rounded
+ * before the range test (as jr3.c does): a value within half a count of
+ * the limit is that count, not saturated, so that every decoded sample
+ * encodes back to its own registers. Compared as doubles before the
+ * conversion, so +-Inf and huge values never reach it. */
 static uint16_t to_counts(double v, double fs, bool *sat, bool *bad)
 {
     if (isnan(v)) {
         *bad = true;
         return 0;
     }
-    const double c = v * LOADID_MODBUS_FT_COUNTS_PER_FULL_SCALE / fs;
+    const double c = round(v * LOADID_MODBUS_FT_COUNTS_PER_FULL_SCALE / fs);
     long r;
-    if (c >= 32767.0) {
-        *sat = *sat || c > 32767.0;
+    if (c > 32767.0) {
+        *sat = true;
         r = 32767;
-    } else if (c <= -32768.0) {
-        *sat = *sat || c < -32768.0;
+    } else if (c < -32768.0) {
+        *sat = true;
         r = -32768;
     } else {
-        r = lround(c);
+        r = (long)c;
     }
     return (uint16_t)(r < 0 ? r + 65536 : r);
 }

@@ -180,8 +180,26 @@ void build_chain(const urdf::ModelInterface &model, const char *base, const char
         throw Fail{LOADID_E_MODEL, "a number on the chain is not finite"};
 }
 
+// urdfdom's links own their children (Link::child_links), so a joint graph
+// with a cycle, which build_chain refuses as a loop, makes links own each
+// other and the model is never freed. Cleared on every way out.
+struct ReleaseLinks {
+    urdf::ModelInterfaceSharedPtr &model;
+    ~ReleaseLinks() {
+        if (!model) return;
+        for (auto &entry : model->links_)
+            if (entry.second) entry.second->clear();
+    }
+};
+
+// One line, as the programs print it: urdfdom's messages quote the
+// offending text, and names in the file may hold any character, so control
+// characters (a newline, a tab) become '?', as in the YAML reader's.
 void report(char *err, size_t errlen, const char *name, const std::string &why) {
-    if (err && errlen > 0) std::snprintf(err, errlen, "%s: %s", name, why.c_str());
+    if (!err || errlen == 0) return;
+    std::snprintf(err, errlen, "%s: %s", name, why.c_str());
+    for (char *c = err; *c; ++c)
+        if (static_cast<unsigned char>(*c) < 0x20 || *c == 0x7f) *c = '?';
 }
 
 }  // namespace
@@ -199,7 +217,16 @@ extern "C" int loadid_urdf_load_string(const char *xml, const char *name, const 
     console_bridge::useOutputHandler(&capture);
     int rc = 0;
     try {
-        urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(xml);
+        // TinyXML 2.6.2 (urdfdom's parser on Debian 12) steps over a whole
+        // UTF-8 sequence by its lead byte (TiXmlBase::GetChar returns
+        // p + length), so text that ends inside one is read past its NUL,
+        // into whatever memory follows. Four NULs more keep every such step
+        // inside the string; they change nothing else (the text ends at
+        // the first).
+        std::string text(xml);
+        text.append(4, '\0');
+        urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(text);
+        ReleaseLinks release{model};
         if (!model) {
             throw Fail{LOADID_E_MODEL,
                        "not a valid URDF: " +

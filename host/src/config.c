@@ -758,16 +758,10 @@ static void check_unknown(void *ctx, const loadid_yaml_unused_t *u) {
     forward_warning(k->sink, line);
 }
 
-int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t errlen,
-                       loadid_config_warn_fn warn, void *warn_ctx) {
-    if (err && errlen) err[0] = '\0';
-    if (!path || !cfg) {
-        if (err && errlen) snprintf(err, errlen, "loadid_config_load: invalid argument");
-        return -1;
-    }
-    loadid_yaml_doc_t *doc = NULL;
-    if (loadid_yaml_load_file(path, &doc, err, errlen) < 0) return -1;
-
+/* The configuration from a parsed document (which it frees); path is the
+ * file's, for messages and relative paths. */
+static int load_doc(loadid_yaml_doc_t *doc, const char *path, loadid_config_t *cfg, char *err,
+                    size_t errlen, loadid_config_warn_fn warn, void *warn_ctx) {
     loadid_config_t *c = malloc(sizeof *c); /* cfg stays untouched on failure */
     if (!c) {
         if (err && errlen) snprintf(err, errlen, "%s: out of memory", path);
@@ -810,6 +804,31 @@ fail:
     free(c);
     loadid_yaml_free(doc);
     return -1;
+}
+
+int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t errlen,
+                       loadid_config_warn_fn warn, void *warn_ctx) {
+    if (err && errlen) err[0] = '\0';
+    if (!path || !cfg) {
+        if (err && errlen) snprintf(err, errlen, "loadid_config_load: invalid argument");
+        return -1;
+    }
+    loadid_yaml_doc_t *doc = NULL;
+    if (loadid_yaml_load_file(path, &doc, err, errlen) < 0) return -1;
+    return load_doc(doc, path, cfg, err, errlen, warn, warn_ctx);
+}
+
+int loadid_config_load_string(const char *path, const char *text, size_t len,
+                              loadid_config_t *cfg, char *err, size_t errlen,
+                              loadid_config_warn_fn warn, void *warn_ctx) {
+    if (err && errlen) err[0] = '\0';
+    if (!path || (!text && len) || !cfg) {
+        if (err && errlen) snprintf(err, errlen, "loadid_config_load_string: invalid argument");
+        return -1;
+    }
+    loadid_yaml_doc_t *doc = NULL;
+    if (loadid_yaml_load_string(path, text, len, &doc, err, errlen) < 0) return -1;
+    return load_doc(doc, path, cfg, err, errlen, warn, warn_ctx);
 }
 
 void loadid_config_channel(const loadid_config_t *cfg, const char *name, char *out, size_t len) {

@@ -891,6 +891,46 @@ static void unreadable_files(void **state) {
     assert_int_equal(strlen(small), sizeof small - 1);
 }
 
+/* loadid_config_load_string (the fuzzer's entry): the same as the file,
+ * relative paths against the given name's folder, nothing read. */
+static void load_from_a_buffer(void **state) {
+    (void)state;
+    static char text[16384];
+    FILE *f = fopen(EXAMPLE, "rb");
+    assert_non_null(f);
+    const size_t n = fread(text, 1, sizeof text, f);
+    assert_true(n > 0 && n < sizeof text);
+    fclose(f);
+    loadid_config_t from_file, from_text;
+    warnings_t w;
+    memset(&from_file, 0, sizeof from_file);
+    memset(&from_text, 0, sizeof from_text);
+    load_ok(EXAMPLE, &from_file, &w);
+    char err[1024] = "x";
+    assert_int_equal(loadid_config_load_string(EXAMPLE, text, n, &from_text, err, sizeof err,
+                                               collect, &w), 0);
+    assert_string_equal(err, "");
+    assert_memory_equal(&from_file, &from_text, sizeof from_file);
+
+    /* Not NUL-terminated: only len bytes count ("robot:" then junk). */
+    const char partial[] = "robot:\n  urdf: r.urdf\nXXXX";
+    assert_int_equal(loadid_config_load_string("/nowhere/c.yaml", partial, sizeof partial - 5,
+                                               &from_text, err, sizeof err, NULL, NULL), 0);
+    assert_string_equal(from_text.robot_urdf, "/nowhere/r.urdf");
+
+    /* Errors name the given file; cfg stays untouched. */
+    loadid_config_t before = from_text;
+    const char bad[] = "can:\n  base_id: 0x800\n";
+    assert_int_equal(loadid_config_load_string("/nowhere/c.yaml", bad, strlen(bad), &from_text,
+                                               err, sizeof err, NULL, NULL), -1);
+    assert_prefix(err, "/nowhere/c.yaml:2: can.base_id:");
+    assert_memory_equal(&from_text, &before, sizeof before);
+    assert_int_equal(loadid_config_load_string(NULL, bad, 1, &from_text, err, sizeof err, NULL,
+                                               NULL), -1);
+    assert_int_equal(loadid_config_load_string("c.yaml", NULL, 1, &from_text, err, sizeof err,
+                                               NULL, NULL), -1);
+}
+
 /* --- The YAML tree itself ------------------------------------------------- */
 
 static loadid_yaml_doc_t *parse(const char *text) {
@@ -1121,6 +1161,7 @@ int main(void) {
         cmocka_unit_test(other_programs_sections_are_warnings),
         cmocka_unit_test(urdf_origin_names_file_line_and_key),
         cmocka_unit_test(unreadable_files),
+        cmocka_unit_test(load_from_a_buffer),
         cmocka_unit_test(simulation_realism_keys),
         cmocka_unit_test(yaml_tree_nodes_and_lines),
         cmocka_unit_test(yaml_tree_scalars),

@@ -215,6 +215,21 @@ static void encoder_round_trip_and_saturation(void **state)
     assert_int_equal(r[5], 0);
     assert_int_equal(r[6], LOADID_MODBUS_FT_STATUS_SATURATED);
     assert_int_equal(r[7], 42);
+    /* Within half a count of the limit: that count, not saturated (the
+     * fuzzer's round trip found 32767 counts of a 1.9 N full scale coming
+     * back saturated: 32767 * 1.9 / 16384 * 16384 / 1.9 > 32767). */
+    const double fs19[3] = {1.9, 1.9, 1.9};
+    const double edge[3] = {32767 * 1.9 / 16384, 32767.49 * 1.9 / 16384, -32768.49 * 1.9 / 16384};
+    const double t0[3] = {0, 0, 0};
+    assert_int_equal(loadid_modbus_ft_encode(fs19, kFsMoment, edge, t0, false, 7, r), 0);
+    assert_int_equal(r[0], 32767);
+    assert_int_equal(r[1], 32767);
+    assert_int_equal(r[2], reg_of(-32768));
+    assert_int_equal(r[6], 0);
+    const double over[3] = {32767.5 * 1.9 / 16384, 0, 0};
+    assert_int_equal(loadid_modbus_ft_encode(fs19, kFsMoment, over, t0, false, 7, r), 0);
+    assert_int_equal(r[0], 32767);
+    assert_int_equal(r[6], LOADID_MODBUS_FT_STATUS_SATURATED);
     const double nanf[3] = {NAN, 0, 0};
     assert_int_equal(loadid_modbus_ft_encode(kFsForce, kFsMoment, nanf, t, false, 1, r), 0);
     assert_true(r[6] & LOADID_MODBUS_FT_STATUS_FAULT);

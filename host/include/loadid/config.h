@@ -296,6 +296,14 @@ typedef void (*loadid_config_warn_fn)(void *ctx, const char *msg);
 int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t errlen,
                        loadid_config_warn_fn warn, void *warn_ctx);
 
+/* The same from text in memory (len bytes, need not be NUL-terminated),
+ * as if it were the file at path (named in messages; relative paths in it
+ * are resolved against its folder; nothing is read from disk). For the
+ * fuzzer and tests. Returns 0 or -1 as loadid_config_load. */
+int loadid_config_load_string(const char *path, const char *text, size_t len,
+                              loadid_config_t *cfg, char *err, size_t errlen,
+                              loadid_config_warn_fn warn, void *warn_ctx);
+
 #ifdef __cplusplus
 }
 #endif
