@@ -150,11 +150,11 @@ def run_vm(args, work):
     with open(err_path) as f:
         stderr = f.read()
     m = re.search(r"LOADID-BOOT uptime_cs (\d+)", out)
-    run = VmRun({"out": out, "log": log, "stderr": stderr, "returncode": rc,
-           "boot_s": (t_boot - t_qemu) if t_boot else float("nan"),
-           "run_s": (time.monotonic() - t_boot) if t_boot else float("nan"),
-           "deadline_s": deadline - (t_boot or start),
-           "guest_boot": f"boot {int(m.group(1)) / 100:.2f} s" if m else "not reported"})
+    run = VmRun(out=out, log=log, stderr=stderr, returncode=rc,
+                boot_s=(t_boot - t_qemu) if t_boot else float("nan"),
+                run_s=(time.monotonic() - t_boot) if t_boot else float("nan"),
+                deadline_s=deadline - (t_boot or start),
+                guest_boot=f"boot {int(m.group(1)) / 100:.2f} s" if m else "not reported")
     used = re.search(r"^loadidd: samples ok \d+, used (\d+), .* stale (\d+)", out, re.M)
     with open(os.path.join(work, "timings.log"), "a") as f:
         f.write(f"{time.strftime('%Y-%m-%d %H:%M:%S')} load {os.getloadavg()[0]:.1f} "
