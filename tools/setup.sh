@@ -35,8 +35,9 @@ DEBIAN_PACKAGES=(
   libmodbus-dev
   # the LCM test's private network namespace (ip; unshare is in util-linux)
   iproute2
-  # sd_notify for the systemd unit (Type=notify, WatchdogSec)
-  libsystemd-dev
+  # sd_notify for the systemd unit (Type=notify, WatchdogSec); the unit's
+  # test: systemd-analyze (security, syscall-filter) and strace
+  libsystemd-dev systemd strace
   # the vcan test's virtual machine: qemu, busybox for its initramfs, cpio
   qemu-system-x86 busybox-static cpio
   # lcm-spy with the project's types: Java, lcm.jar, jchart2d; Xvfb and a screenshot.

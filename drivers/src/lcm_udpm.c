@@ -119,11 +119,20 @@ int loadid_lcm_udpm_open(const loadid_lcm_udpm_url_t *url, char *err, size_t err
     return fd;
 }
 
-int loadid_lcm_udpm_read(int fd, uint8_t *buf, size_t cap) {
-    const ssize_t n = recv(fd, buf, cap, MSG_DONTWAIT | MSG_TRUNC);
+int loadid_lcm_udpm_read_from(int fd, uint8_t *buf, size_t cap, uint32_t *source) {
+    struct sockaddr_in from;
+    socklen_t fromlen = sizeof from;
+    memset(&from, 0, sizeof from);
+    const ssize_t n =
+        recvfrom(fd, buf, cap, MSG_DONTWAIT | MSG_TRUNC, (struct sockaddr *)&from, &fromlen);
     if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR ? 0 : -errno;
     if ((size_t)n > cap) return -EMSGSIZE; /* truncated: dropped */
+    if (source) *source = from.sin_family == AF_INET ? ntohl(from.sin_addr.s_addr) : 0;
     return (int)n;
+}
+
+int loadid_lcm_udpm_read(int fd, uint8_t *buf, size_t cap) {
+    return loadid_lcm_udpm_read_from(fd, buf, cap, NULL);
 }
 
 int loadid_lcm_udpm_open_tx(const loadid_lcm_udpm_url_t *url, loadid_lcm_udpm_tx_t *tx,

@@ -331,6 +331,32 @@ fail:
     return -EINVAL;
 }
 
+/* lcm.command_sources: a sequence of IPv4 addresses or CIDR blocks ([]
+ * is every sender, as without the key). */
+static int read_command_sources(loadid_yaml_node_t *seq, loadid_config_t *c) {
+    const size_t count = loadid_yaml_count(seq);
+    if (count > LOADID_IPV4_ALLOW_MAX)
+        return loadid_yaml_fail(seq, "at most %d addresses or blocks, got %zu",
+                                LOADID_IPV4_ALLOW_MAX, count);
+    loadid_ipv4_net_t nets[LOADID_IPV4_ALLOW_MAX];
+    for (size_t i = 0; i < count; ++i) {
+        const loadid_yaml_node_t *item = loadid_yaml_item(seq, i);
+        char text[64], fixed[20];
+        if (loadid_yaml_as_string(item, text, sizeof text)) return -EINVAL;
+        const int rc = loadid_ipv4_net_parse(text, &nets[i]);
+        if (rc == -ERANGE)
+            return loadid_yaml_fail(item, "'%s' has bits set after its prefix length; the block "
+                                          "is %s", text,
+                                    loadid_ipv4_net_format(&nets[i], fixed, sizeof fixed));
+        if (rc < 0)
+            return loadid_yaml_fail(item, "expected an IPv4 address (a.b.c.d) or block "
+                                          "(a.b.c.d/n, n 0..32), got '%s'", text);
+    }
+    memcpy(c->lcm_command_sources, nets, count * sizeof nets[0]);
+    c->lcm_num_command_sources = (int)count;
+    return 0;
+}
+
 static int read_can_jr3_lcm(loadid_yaml_node_t *root, loadid_config_t *c) {
     loadid_yaml_node_t *s = NULL, *fs = NULL, *n;
     TRY(read_section(root, "can", &s));
@@ -378,6 +404,10 @@ static int read_can_jr3_lcm(loadid_yaml_node_t *root, loadid_config_t *c) {
                 return loadid_yaml_fail(n, "a channel name prefix of letters, digits, '_', '-', "
                                            "'.' and '/' only, got '%s'", prefix);
         memcpy(c->lcm_channel_prefix, prefix, sizeof prefix);
+    }
+    if (loadid_yaml_get(s, "command_sources")) {
+        TRY(loadid_yaml_get_sequence(s, "command_sources", &n));
+        TRY(read_command_sources(n, c));
     }
     return 0;
 fail:

@@ -1,7 +1,8 @@
 /*
  * The live service of loadidd (live.h): epoll over
  *   - the LCM socket: joint_state_t on LOADID_JOINTS, command_t on
- *     LOADID_COMMAND (commands act when received);
+ *     LOADID_COMMAND (commands act when received; with
+ *     lcm.command_sources, only those from the senders listed);
  *   - the CAN input: a SocketCAN raw socket (frames carry the kernel's
  *     receive time), or a candump log replayed in real time with its times
  *     rewritten to now;
@@ -87,6 +88,8 @@ typedef struct {
     int lcm_rx_fd;                /* udpm://: receiving, or -1 */
     lcm_t *lcm;                   /* other providers, else NULL */
     double command_warned_us;     /* throttles the log line of a malformed command */
+    int64_t commands_refused;     /* command_t from senders not in lcm.command_sources */
+    double refused_warned_us;     /* throttles their log line */
     int can_fd;                   /* SocketCAN, or -1 */
     FILE *can_file;
     loadid_candump_reader_t *can_reader;
@@ -285,13 +288,37 @@ static void on_command(live_t *L, const uint8_t *data, size_t len) {
     loadid_pipeline_command(L->pipe, t, m.action, m.load_name);
 }
 
-/* One LCM message; other channels (the daemon's own output, looped back
- * by multicast, and anyone else's) are ignored. Returns 1 when it was an
- * input. */
-static int on_message(live_t *L, const char *name, const uint8_t *data, size_t len) {
+/* lcm.command_sources: whether a command from source (IPv4, host order)
+ * may act. One that may not is refused before it is decoded, counted, and
+ * logged with its sender and the count so far (the first at once, then at
+ * most a line a second). status_t has no field for it (its fields are
+ * fixed; frames_bad and joint_msgs_bad count other inputs' faults). */
+static int command_allowed(live_t *L, uint32_t source) {
+    if (loadid_ipv4_allow_match(L->cfg->lcm_command_sources, L->cfg->lcm_num_command_sources,
+                                source))
+        return 1;
+    const double now = mono_us();
+    if (L->commands_refused++ == 0 || now - L->refused_warned_us > 1e6) {
+        fprintf(stderr, "loadidd: %s from %u.%u.%u.%u refused: not in lcm.command_sources "
+                        "(%lld refused so far)\n", channels[CH_COMMAND], source >> 24,
+                (source >> 16) & 255, (source >> 8) & 255, source & 255,
+                (long long)L->commands_refused);
+        L->refused_warned_us = now;
+    }
+    return 0;
+}
+
+/* One LCM message from source (the sender's IPv4 address, host order; 0
+ * on liblcm's providers, which do not say, and which refuse
+ * lcm.command_sources at start-up); other channels (the daemon's own
+ * output, looped back by multicast, and anyone else's) are ignored.
+ * Returns 1 when it was an input. */
+static int on_message(live_t *L, const char *name, const uint8_t *data, size_t len,
+                      uint32_t source) {
     if (strcmp(name, channels[CH_JOINTS]) == 0) on_joints(L, data, len);
-    else if (strcmp(name, channels[CH_COMMAND]) == 0) on_command(L, data, len);
-    else return 0;
+    else if (strcmp(name, channels[CH_COMMAND]) == 0) {
+        if (command_allowed(L, source)) on_command(L, data, len);
+    } else return 0;
     return 1;
 }
 
@@ -301,17 +328,18 @@ static int on_message(live_t *L, const char *name, const uint8_t *data, size_t l
  * which liblcm's receive thread dropped before the loop saw it) is not a
  * loop event in status_t's loop times. */
 static int read_lcm(live_t *L) {
-    const int n = loadid_lcm_udpm_read(L->lcm_rx_fd, rx_buf, sizeof rx_buf);
+    uint32_t source = 0;
+    const int n = loadid_lcm_udpm_read_from(L->lcm_rx_fd, rx_buf, sizeof rx_buf, &source);
     const char *channel;
     const uint8_t *data;
     size_t len;
     return n > 0 && loadid_lcm_udpm_parse(rx_buf, (size_t)n, &channel, &data, &len) == 0 &&
-           on_message(L, channel, data, len);
+           on_message(L, channel, data, len, source);
 }
 
 /* Other providers: liblcm's raw subscription. */
 static void on_lcm_raw(const lcm_recv_buf_t *rbuf, const char *channel, void *ctx) {
-    (void)on_message(ctx, channel, rbuf->data, rbuf->data_size);
+    (void)on_message(ctx, channel, rbuf->data, rbuf->data_size, 0);
 }
 
 /* The loop time: handling one input event (a CAN read, an LCM message,
@@ -464,6 +492,12 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
             loadid_pipeline_destroy(L.pipe);
             return 1;
         }
+    } else if (cfg->lcm_num_command_sources > 0) {
+        /* liblcm's providers do not say who sent a message. */
+        fprintf(stderr, "loadidd: lcm.command_sources needs a udpm:// lcm.url, not %s\n",
+                url ? url : "");
+        loadid_pipeline_destroy(L.pipe);
+        return 1;
     } else if (!(L.lcm = lcm_create(cfg->lcm_url))) {
         fprintf(stderr, "loadidd: cannot open LCM at %s\n", cfg->lcm_url);
         loadid_pipeline_destroy(L.pipe);
@@ -631,12 +665,13 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         fprintf(stderr,
                 "loadidd: samples ok %lld, used %lld, frames bad %lld, incomplete %lld, "
                 "saturated %lld, faulty %lld, gaps %lld, joint msgs bad %lld, stale %lld, "
-                "CAN errors %lld, error frames %lld\n",
+                "CAN errors %lld, error frames %lld, commands refused %lld\n",
                 (long long)st.samples_ok, (long long)st.samples_used, (long long)st.frames_bad,
                 (long long)st.samples_incomplete, (long long)st.samples_saturated,
                 (long long)st.samples_faulty, (long long)st.sequence_gaps,
                 (long long)st.joint_msgs_bad, (long long)st.samples_stale,
-                (long long)L.can_errors, (long long)L.error_frames);
+                (long long)L.can_errors, (long long)L.error_frames,
+                (long long)L.commands_refused);
         loadid_modbus_input_stats_t ms;
         if (L.ft && loadid_modbus_input_stats(L.ft, &ms) == 0)
             fprintf(stderr,

@@ -162,6 +162,7 @@ static void assert_defaults(const loadid_config_t *c) {
     assert_doubles(c->jr3_fs_linear, (const double[]){98.1, 98.1, 98.1}, 3, "jr3_fs_linear");
     assert_doubles(c->jr3_fs_angular, (const double[]){1000, 1000, 1000}, 3, "jr3_fs_angular");
     assert_string_equal(c->lcm_url, "udpm://239.255.76.67:7667?ttl=0");
+    assert_int_equal(c->lcm_num_command_sources, 0); /* every sender */
 
     assert_int_equal(c->num_methods, 3);
     assert_int_equal(c->methods[0], LOADID_METHOD_RTLS);
@@ -1143,6 +1144,42 @@ static void yaml_tree_refuses(void **state) {
     loadid_yaml_free(NULL);
 }
 
+/* lcm.command_sources: addresses and CIDR blocks, each checked at its own
+ * line; none (absent or []) accepts every sender. */
+static void lcm_command_sources(void **state) {
+    (void)state;
+    loadid_config_t c;
+    warnings_t w;
+    load_ok(write_file("s.yaml", "lcm:\n  command_sources: [127.0.0.1, 10.1.0.0/16, "
+                                 "0.0.0.0/0]\n"), &c, &w);
+    assert_int_equal(w.count, 0);
+    assert_int_equal(c.lcm_num_command_sources, 3);
+    assert_int_equal(c.lcm_command_sources[0].net, 0x7F000001u);
+    assert_int_equal(c.lcm_command_sources[0].mask, 0xFFFFFFFFu);
+    assert_int_equal(c.lcm_command_sources[1].net, 0x0A010000u);
+    assert_int_equal(c.lcm_command_sources[1].mask, 0xFFFF0000u);
+    assert_int_equal(c.lcm_command_sources[2].mask, 0u);
+    load_ok(write_file("s.yaml", "lcm:\n  command_sources: []\n"), &c, &w);
+    assert_int_equal(c.lcm_num_command_sources, 0);
+    expect_error("lcm:\n  command_sources:\n    - 127.0.0.1\n    - 10.0.0.300\n",
+                 "4: lcm.command_sources[1]: expected an IPv4 address (a.b.c.d) or block "
+                 "(a.b.c.d/n, n 0..32), got '10.0.0.300'");
+    expect_error("lcm:\n  command_sources: [10.0.0.0/33]\n",
+                 "2: lcm.command_sources[0]: expected an IPv4 address");
+    expect_error("lcm:\n  command_sources: [robot-pc]\n",
+                 "2: lcm.command_sources[0]: expected an IPv4 address");
+    expect_error("lcm:\n  command_sources: [10.0.0.5/24]\n",
+                 "2: lcm.command_sources[0]: '10.0.0.5/24' has bits set after its prefix "
+                 "length; the block is 10.0.0.0/24");
+    expect_error("lcm:\n  command_sources: 127.0.0.1\n",
+                 "2: lcm.command_sources: expected a sequence");
+    char many[1024] = "lcm:\n  command_sources: [";
+    for (int i = 0; i <= LOADID_IPV4_ALLOW_MAX; ++i)
+        snprintf(many + strlen(many), sizeof many - strlen(many), "%s10.0.0.%d", i ? ", " : "", i);
+    strcat(many, "]\n");
+    expect_error(many, "2: lcm.command_sources: at most 16 addresses or blocks, got 17");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(shipped_example_is_the_defaults),
@@ -1166,6 +1203,7 @@ int main(void) {
         cmocka_unit_test(yaml_tree_nodes_and_lines),
         cmocka_unit_test(yaml_tree_scalars),
         cmocka_unit_test(yaml_tree_refuses),
+        cmocka_unit_test(lcm_command_sources),
     };
     return cmocka_run_group_tests(tests, setup_dir, remove_dir);
 }

@@ -15,6 +15,22 @@
 # serial console between LOADID-* markers; this script prints the console
 # and test_vcan_vm.py judges it.
 #
+# Timing: the test replays recordings in real time, and an emulated CPU
+# that the host's load starves falls behind them: the JR3 frames then carry
+# the (late) time they went out, the joint states the time they were due,
+# and the estimate is wrong (seen on this 2-core machine under load: 8 %
+# of the mass live, 44 % from the recorded session). So the VM runs with
+# -icount shift=0,sleep=off: its clocks advance by the instructions it
+# executes (1 ns each) and jump ahead when it idles, so its real time is
+# its own, whatever the host's load; a loaded host makes the run longer
+# in wall time, not the VM late. icount hangs the kernel bringing up a
+# second CPU (QEMU 7.2), and runs the CPUs of a VM one at a time anyway,
+# so the VM has one. Waits in the VM are in its own time; where a condition
+# can be waited for (the daemon's first status_t, the saved estimate, the
+# recorder's start), it is, with a deadline. The host side measures the
+# boot in wall time (from LOADID-QEMU-START to /init's LOADID-BOOT line)
+# and gives the rest of the run a deadline in boots (test_vcan_vm.py).
+#
 # Usage: run_vcan_vm.sh WORKDIR LOADIDD LOADID_REPLAY RECORDING_DIR URDF
 #                       LOADID_CLI LOADID_RECORD ESTIMATE_WATCH FAULTS_DIR
 set -eu
@@ -87,6 +103,26 @@ YAML
 cat > "$root/init" <<'INIT'
 #!/bin/sh
 mount -t proc proc /proc
+# The kernel's uptime [1/100 s] (/proc/uptime has two decimals): the VM's
+# own time under -icount.
+now_cs() {
+    read up idle < /proc/uptime
+    frac=${up#*.}
+    echo $(( ${up%.*} * 100 + ${frac#0} ))
+}
+echo "LOADID-BOOT uptime_cs $(now_cs)"
+# within MS COMMAND...: runs COMMAND every 0.1 s until it succeeds, for at
+# most MS milliseconds; fails when it never did.
+within() {
+    end=$(( $(now_cs) + $1 / 10 ))
+    shift
+    until "$@"; do
+        [ "$(now_cs)" -lt "$end" ] || return 1
+        sleep 0.1
+    done
+}
+# The daemon is up when its loop has published a status_t.
+daemon_up() { loadid --config "$1" status --timeout 3 > /dev/null; }
 mount -t sysfs sys /sys
 mount -t devtmpfs dev /dev
 mount -t tmpfs tmp /tmp
@@ -97,27 +133,33 @@ ip link add dev vcan0 type vcan
 ip link set vcan0 up
 cd /data
 # Senders stay on one CPU: vcan and lo hand each frame or datagram to the
-# backlog of the CPU that sent it, so a sender migrating between the two
-# CPUs reorders what every socket receives (seen: whole JR3 samples and
-# joint states out of order, counted as gaps and bad messages).
-pin="taskset 0x2"
+# backlog of the CPU that sent it, so a sender migrating between two CPUs
+# reorders what every socket receives (seen: whole JR3 samples and joint
+# states out of order, counted as gaps and bad messages). With one CPU
+# (-icount) there is nothing to pin.
+pin=
+[ "$(grep -c ^processor /proc/cpuinfo)" -eq 1 ] || pin="taskset 0x2"
 # canplayer's syntax: every line of can.log reaches vcan0.
 lines=$(wc -l < can.log)
 candump -r 4194304 -L vcan0 > /tmp/dump.log &
 dumper=$!
 sleep 0.5
 $pin canplayer -I can.log
-sleep 0.5
+# candump has written every line, or stopped getting more.
+dumped() { [ "$(wc -l < /tmp/dump.log)" -ge "$lines" ]; }
+within 5000 dumped || true
 kill $dumper
 echo "LOADID-CANPLAYER lines $lines received $(wc -l < /tmp/dump.log)"
 # The service on vcan0 and LCM, fed by loadid-replay.
 loadidd --config /data/loadid.yaml --verbose 2> /tmp/loadidd.err &
 daemon=$!
-sleep 1
+within 10000 daemon_up /data/loadid.yaml || echo "LOADID-VERDICT fail loadidd not up"
 $pin loadid-replay --interface vcan0 /data
-sleep 2
-kill -TERM $daemon
+# DONE: the estimate saved; then the replay's last samples counted.
+within 10000 [ -e /results/latest.yaml ] || echo "LOADID-VERDICT fail no saved estimate"
 sleep 1
+kill -TERM $daemon
+wait $daemon
 cat /tmp/loadidd.err
 echo "LOADID-RESULT-BEGIN"
 cat /results/latest.yaml
@@ -126,7 +168,7 @@ echo "LOADID-RESULT-END"
 # emulated CPUs fell behind the replay's clock).
 loadid-record --config /data/loadid.yaml --out /tmp/recorded 2> /tmp/record.err &
 recorder=$!
-sleep 0.5
+within 5000 grep -q recording /tmp/record.err || echo "LOADID-VERDICT fail loadid-record not up"
 $pin loadid-replay --interface vcan0 /data
 sleep 0.5
 kill -TERM $recorder
@@ -144,7 +186,8 @@ loadidd --config faults.yaml --verbose 2> /tmp/faults.err &
 daemon=$!
 estimate_watch > /tmp/estimates.txt &
 watcher=$!
-sleep 1
+within 10000 daemon_up faults.yaml || echo "LOADID-VERDICT fail loadidd not up (faults)"
+sleep 0.5  # estimate_watch subscribed
 for step in "idle zero" "zeroing start" "window stop" "done -"; do
     set -- $step
     $pin loadid-replay --interface vcan0 $1
@@ -155,7 +198,8 @@ sleep 0.5
 ip link del dev vcan0
 sleep 1.5
 ip link add dev vcan0 type vcan && ip link set vcan0 up
-# Meanwhile loadid-record --duration, every channel: the daemon's status_t.
+# Meanwhile loadid-record --duration, every channel: the daemon's status_t
+# (once a second).
 loadid-record --all-channels --duration 1.5 --out /tmp/short 2> /tmp/short.err &
 short=$!
 sleep 2.5  # the daemon retries once a second
@@ -187,6 +231,7 @@ INIT
 chmod +x "$root/init"
 (cd "$root" && find . | cpio -o -H newc 2>/dev/null | gzip -1) > "$work/initramfs.gz"
 
-timeout 600 qemu-system-x86_64 -accel tcg -smp 2 -m 512 -nographic -no-reboot \
+echo "LOADID-QEMU-START"
+exec qemu-system-x86_64 -accel tcg -icount shift=0,sleep=off -smp 1 -m 512 -nographic -no-reboot \
     -kernel "$vmlinuz" -initrd "$work/initramfs.gz" \
     -append "console=ttyS0 quiet panic=-1" < /dev/null

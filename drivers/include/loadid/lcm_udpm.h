@@ -73,6 +73,12 @@ int loadid_lcm_udpm_open(const loadid_lcm_udpm_url_t *url, char *err, size_t err
  * length, 0 when none is waiting, or -errno. */
 int loadid_lcm_udpm_read(int fd, uint8_t *buf, size_t cap);
 
+/* The same, and the sender's IPv4 address (host byte order) in *source
+ * (may be NULL): the address the datagram came from, as the kernel saw it.
+ * UDP has no authentication: this says which host (and, on a host, which
+ * local address) sent it, not who. */
+int loadid_lcm_udpm_read_from(int fd, uint8_t *buf, size_t cap, uint32_t *source);
+
 /* A sending socket for the group (IP_MULTICAST_TTL ttl, IP_MULTICAST_LOOP
  * on, as liblcm's: peers on this host receive). Returns 0, or -errno with
  * a reason in err. */

@@ -41,6 +41,7 @@
 #include <stdint.h>
 
 #include "loadid/chain.h"
+#include "loadid/ipv4_allow.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -79,6 +80,11 @@ typedef struct {
                                            (several robots on one LCM network: "R2_"
                                            gives R2_LOADID_ESTIMATE ...); letters,
                                            digits, '_', '-', '.', '/' only */
+    /* lcm.command_sources: the senders whose command_t the daemon obeys
+     * (udpm:// only), IPv4 addresses or CIDR blocks; default none listed:
+     * every sender (docs/SECURITY.md says why). */
+    loadid_ipv4_net_t lcm_command_sources[LOADID_IPV4_ALLOW_MAX];
+    int lcm_num_command_sources;        /* 0: accept commands from any sender */
 
     /* estimation: */
     int num_methods;                    /* default 3: RTLS, RIV, RLS */
