@@ -20,7 +20,8 @@ struct loadid_eventlog {
     int ended;
     char error_text[LOADID_EVENTLOG_PROBLEM_MAX + 64];
     loadid_eventlog_stats_t st;
-    char channel[LOADID_EVENTLOG_CHANNEL_MAX + 1];
+    char channel[LOADID_EVENTLOG_CHANNEL_MAX + 1]; /* the event's */
+    char probe[LOADID_EVENTLOG_CHANNEL_MAX + 1];   /* a candidate's, while searching */
     uint8_t scan[SCAN_CHUNK];
     uint8_t data[];           /* data_max bytes */
 };
@@ -64,9 +65,10 @@ static long read_at(loadid_eventlog_t *r, int64_t off, void *dst, size_t n) {
 }
 
 /* Classifies the bytes at off as an event header; on H_OK fills *h and
- * r->channel (NUL-terminated). *detail: the offending value for the
- * problem's text. */
-static int header_at(loadid_eventlog_t *r, int64_t off, header_t *h, uint32_t *detail) {
+ * channel (room for LOADID_EVENTLOG_CHANNEL_MAX + 1, NUL-terminated).
+ * *detail: the offending value for the problem's text. */
+static int header_at(loadid_eventlog_t *r, int64_t off, header_t *h, char *channel,
+                     uint32_t *detail) {
     uint8_t b[LOADID_EVENTLOG_HEADER];
     const long got = read_at(r, off, b, sizeof b);
     if (got < 0) return H_IO;
@@ -91,17 +93,17 @@ static int header_at(loadid_eventlog_t *r, int64_t off, header_t *h, uint32_t *d
         *detail = (uint32_t)h->data_len;
         return H_DATA_LEN;
     }
-    const long n = read_at(r, off + LOADID_EVENTLOG_HEADER, r->channel, (size_t)h->channel_len);
+    const long n = read_at(r, off + LOADID_EVENTLOG_HEADER, channel, (size_t)h->channel_len);
     if (n < 0) return H_IO;
     for (long i = 0; i < n; ++i) {
-        const unsigned char c = (unsigned char)r->channel[i];
+        const unsigned char c = (unsigned char)channel[i];
         if (c < 0x20 || c > 0x7e) {
             *detail = c;
             return H_CHANNEL;
         }
     }
     if (n < h->channel_len) return H_SHORT;
-    r->channel[h->channel_len] = 0;
+    channel[h->channel_len] = 0;
     return H_OK;
 }
 
@@ -121,7 +123,7 @@ static int64_t find_event(loadid_eventlog_t *r, int64_t from, int64_t to) {
             if (r->scan[i] != 0xED || be32(r->scan + i) != LOADID_EVENTLOG_SYNC) continue;
             header_t h;
             uint32_t detail;
-            const int hs = header_at(r, off + i, &h, &detail);
+            const int hs = header_at(r, off + i, &h, r->probe, &detail);
             if (hs == H_IO) return -2;
             if (hs == H_OK || hs == H_SHORT) return off + i;
         }
@@ -235,7 +237,7 @@ int loadid_eventlog_next(loadid_eventlog_t *r, loadid_eventlog_event_t *ev) {
         }
         header_t h;
         uint32_t detail = 0;
-        const int hs = header_at(r, off, &h, &detail);
+        const int hs = header_at(r, off, &h, r->channel, &detail);
         if (hs == H_IO) return fail_io(r, off);
         if (hs == H_SHORT) {
             truncated(r, off, 0);
@@ -249,6 +251,18 @@ int loadid_eventlog_next(loadid_eventlog_t *r, loadid_eventlog_event_t *ev) {
             return rc;
         }
         const int64_t end = off + LOADID_EVENTLOG_HEADER + h.channel_len + (int64_t)h.data_len;
+        /* The data first, so the reads go forward: header, data, the next
+         * sync word, the next header. */
+        const int fits = (size_t)h.data_len <= r->data_max && end <= r->st.size;
+        if (fits) {
+            const long got = read_at(r, off + LOADID_EVENTLOG_HEADER + h.channel_len, r->data,
+                                     (size_t)h.data_len);
+            if (got < 0) return fail_io(r, off);
+            if (got < h.data_len) { /* the file shrank under us */
+                truncated(r, off, end - off);
+                return 0;
+            }
+        }
         int follows = end == r->st.size;
         if (end < r->st.size) {
             uint8_t w[4];
@@ -279,16 +293,9 @@ int loadid_eventlog_next(loadid_eventlog_t *r, loadid_eventlog_event_t *ev) {
             }
         }
         r->next = end;
-        if ((size_t)h.data_len > r->data_max) {
+        if (!fits) { /* end <= size here: more data than data_max */
             r->st.oversized++;
             continue;
-        }
-        const long got = read_at(r, off + LOADID_EVENTLOG_HEADER + h.channel_len, r->data,
-                                 (size_t)h.data_len);
-        if (got < 0) return fail_io(r, off);
-        if (got < h.data_len) { /* the file shrank under us */
-            truncated(r, off, end - off);
-            return 0;
         }
         ev->eventnum = h.eventnum;
         ev->timestamp = h.timestamp;

@@ -352,6 +352,40 @@ static void test_corrupt_sync_word_resyncs_and_counts(void **state) {
     }
 }
 
+/* An event whose data hold a sync word and a header that is not
+ * plausible (a control character in its channel), before a damaged sync
+ * word: the search inside it finds nothing, and the event is handed out
+ * with its own channel and data, untouched by the search. */
+static void test_search_inside_an_event_leaves_it_whole(void **state) {
+    (void)state;
+    static log_t l;
+    memset(&l, 0, sizeof l);
+    add(&l, 0, 10, "GOOD", 60);
+    add(&l, 1, 11, "LOST", 8);
+    add(&l, 2, 12, "NEXT", 8);
+    uint8_t *d = l.bytes + l.off[0] + 28 + 4;
+    put32(d + 10, LOADID_EVENTLOG_SYNC);
+    put32(d + 10 + 20, 4);  /* channel length */
+    put32(d + 10 + 24, 0);  /* data length */
+    memcpy(d + 10 + 28, "\x01\x02\x03\x04", 4);
+    uint8_t want[60];
+    memcpy(want, d, sizeof want);
+    l.bytes[l.off[1] + 3] ^= 0xFF; /* LOST's sync word */
+    reader_t rd;
+    open_bytes(&rd, l.bytes, l.len, 0);
+    loadid_eventlog_event_t ev;
+    assert_int_equal(loadid_eventlog_next(rd.r, &ev), 1);
+    assert_string_equal(ev.channel, "GOOD");
+    assert_int_equal(ev.data_len, 60);
+    assert_memory_equal(ev.data, want, sizeof want);
+    expect_event(&rd, &l, 2, 0);
+    expect_end(&rd);
+    loadid_eventlog_stats_t st = stats(&rd);
+    assert_int_equal(st.damaged, 1);
+    assert_int_equal(st.skipped_bytes, (int64_t)l.size[1]);
+    close_reader(&rd);
+}
+
 /* Junk before the log, and junk between events. */
 static void test_junk_is_skipped_and_counted(void **state) {
     (void)state;
@@ -536,6 +570,7 @@ int main(void) {
         cmocka_unit_test(test_length_over_the_next_event),
         cmocka_unit_test(test_length_too_short),
         cmocka_unit_test(test_corrupt_sync_word_resyncs_and_counts),
+        cmocka_unit_test(test_search_inside_an_event_leaves_it_whole),
         cmocka_unit_test(test_junk_is_skipped_and_counted),
         cmocka_unit_test(test_random_bytes_are_not_an_lcm_log),
         cmocka_unit_test(test_size_bounds),
