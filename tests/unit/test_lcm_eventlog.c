@@ -505,6 +505,96 @@ static void test_size_bounds(void **state) {
     fclose(f);
 }
 
+static uint64_t rng_state = 0x2545F4914F6CDD1Dull;
+static uint64_t rng(void) { /* xorshift64 */
+    rng_state ^= rng_state << 13, rng_state ^= rng_state >> 7, rng_state ^= rng_state << 17;
+    return rng_state;
+}
+
+/* Every single-byte change anywhere in a log: each event but the changed
+ * one still comes out whole, at its offset; whatever comes out lies in the
+ * file, in order, within the bounds. */
+static void test_any_one_byte_changed_costs_at_most_its_event(void **state) {
+    (void)state;
+    static log_t l;
+    build(&l, 12);
+    static uint8_t m[LOG_CAP];
+    for (int trial = 0; trial < 4000; ++trial) {
+        memcpy(m, l.bytes, l.len);
+        const size_t at = (size_t)(rng() % l.len);
+        const uint8_t was = m[at];
+        do m[at] = (uint8_t)rng(); while (m[at] == was);
+        int hit = 0;
+        while (!(l.off[hit] <= at && at < l.off[hit] + l.size[hit])) ++hit;
+        reader_t rd;
+        open_bytes(&rd, m, l.len, 0);
+        loadid_eventlog_event_t ev;
+        int next = 0, rc;
+        int64_t prev = -1;
+        while ((rc = loadid_eventlog_next(rd.r, &ev)) == 1) {
+            assert_true(ev.offset > prev);
+            prev = ev.offset;
+            assert_true(ev.offset + 28 + ev.channel_len + ev.data_len <= (int64_t)l.len);
+            assert_int_equal((int32_t)strlen(ev.channel), ev.channel_len);
+            while (next < l.n && (int64_t)l.off[next] < ev.offset) {
+                assert_int_equal(next, hit); /* only the changed event may be missing */
+                ++next;
+            }
+            if (next == hit && (int64_t)l.off[hit] == ev.offset) {
+                ++next; /* the changed one, as changed */
+                continue;
+            }
+            assert_true(next < l.n);
+            assert_int_equal(ev.offset, (int64_t)l.off[next]);
+            assert_int_equal(ev.eventnum, l.eventnum[next]);
+            assert_string_equal(ev.channel, l.channel[next]);
+            assert_int_equal(ev.data_len, l.data_len[next]);
+            for (int32_t k = 0; k < ev.data_len; ++k) assert_int_equal(ev.data[k], data_byte(next, k));
+            ++next;
+        }
+        assert_int_equal(rc, 0);
+        assert_true(next >= l.n - 1);
+        close_reader(&rd);
+    }
+}
+
+/* Many bytes changed, cut short, junk appended: no crash, and everything
+ * handed out lies in the file within the bounds. (ASan and UBSan watch the
+ * reads in the asan build.) */
+static void test_heavy_damage_stays_in_bounds(void **state) {
+    (void)state;
+    static log_t l;
+    build(&l, 20);
+    static uint8_t m[LOG_CAP];
+    for (int trial = 0; trial < 2000; ++trial) {
+        memcpy(m, l.bytes, l.len);
+        size_t len = l.len;
+        const int changes = 1 + (int)(rng() % 40);
+        for (int c = 0; c < changes; ++c) m[rng() % len] = (uint8_t)rng();
+        if (rng() % 2) len = 1 + (size_t)(rng() % len);
+        const size_t junk = rng() % 3 ? 0 : (size_t)(rng() % 300);
+        for (size_t k = 0; k < junk && len < LOG_CAP; ++k) m[len++] = (uint8_t)rng();
+        reader_t rd;
+        open_bytes(&rd, m, len, 1 + (size_t)(rng() % 300));
+        loadid_eventlog_event_t ev;
+        int rc, n = 0;
+        int64_t prev = -1;
+        while ((rc = loadid_eventlog_next(rd.r, &ev)) == 1) {
+            assert_true(ev.offset > prev && ++n <= 2 * l.n + 300);
+            prev = ev.offset;
+            assert_true(ev.offset + 28 + ev.channel_len + ev.data_len <= (int64_t)len);
+            assert_true(ev.channel_len >= 1 && ev.channel_len <= LOADID_EVENTLOG_CHANNEL_MAX);
+            volatile uint8_t sum = 0;
+            for (int32_t k = 0; k < ev.data_len; ++k) sum ^= ev.data[k];
+            (void)sum;
+        }
+        assert_true(rc == 0 || rc == LOADID_EVENTLOG_E_NOT_LOG);
+        loadid_eventlog_stats_t st = stats(&rd);
+        assert_true(st.skipped_bytes <= (int64_t)len);
+        close_reader(&rd);
+    }
+}
+
 /* A pipe cannot be read: the reader looks ahead and back. */
 static void test_unseekable_input_is_refused(void **state) {
     (void)state;
@@ -574,6 +664,8 @@ int main(void) {
         cmocka_unit_test(test_junk_is_skipped_and_counted),
         cmocka_unit_test(test_random_bytes_are_not_an_lcm_log),
         cmocka_unit_test(test_size_bounds),
+        cmocka_unit_test(test_any_one_byte_changed_costs_at_most_its_event),
+        cmocka_unit_test(test_heavy_damage_stays_in_bounds),
         cmocka_unit_test(test_unseekable_input_is_refused),
 #ifndef LOADID_SANITIZED
         cmocka_unit_test(test_reading_allocates_nothing),
