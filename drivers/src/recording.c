@@ -4,26 +4,28 @@
 #include "loadid/recording.h"
 
 #include <errno.h>
-#include <lcm/eventlog.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "loadid/candump.h"
+#include "loadid/lcm_eventlog.h"
 
 struct loadid_recording_reader {
     FILE *can_file;
     loadid_candump_reader_t *can;
-    lcm_eventlog_t *lcm;
-    off_t lcm_size;
+    FILE *lcm_file;
+    loadid_eventlog_t *lcm;
     /* one event of lookahead per stream */
     int can_state;                /* 1 pending, 0 ended, <0 a bad line pending */
     loadid_can_frame_t can_frame;
     long can_line;
-    lcm_eventlog_event_t *lcm_event; /* NULL: ended */
-    lcm_eventlog_event_t *lcm_given; /* handed out, freed on the next call */
-    int lcm_truncated;
+    int lcm_state;                /* 1 pending, 0 ended, <0 a read error */
+    loadid_eventlog_event_t lcm_event;
+    int lcm_given;                /* lcm_event was handed out: read the next
+                                     one on the next call (the reader has
+                                     one buffer, which the caller's event
+                                     points into until then) */
 };
 
 static void advance_can(loadid_recording_reader_t *r) {
@@ -32,12 +34,7 @@ static void advance_can(loadid_recording_reader_t *r) {
 }
 
 static void advance_lcm(loadid_recording_reader_t *r) {
-    r->lcm_event = r->lcm ? lcm_eventlog_read_next_event(r->lcm) : NULL;
-    if (!r->lcm_event && r->lcm) {
-        /* The log ended: cleanly only if the whole file was read. */
-        long pos = ftell(r->lcm->f);
-        r->lcm_truncated = pos >= 0 && (off_t)pos < r->lcm_size;
-    }
+    r->lcm_state = loadid_eventlog_next(r->lcm, &r->lcm_event);
 }
 
 int loadid_recording_reader_open(const char *dir, loadid_recording_reader_t **out, char *err,
@@ -52,13 +49,12 @@ int loadid_recording_reader_open(const char *dir, loadid_recording_reader_t **ou
         e = errno;
     } else if ((e = -loadid_candump_reader_open(r->can_file, &r->can)) == 0) {
         snprintf(path, sizeof path, "%s/lcm.log", dir);
-        struct stat st;
-        if (stat(path, &st) != 0) {
+        r->lcm_file = fopen(path, "rb");
+        if (!r->lcm_file) {
             e = errno;
         } else {
-            r->lcm_size = st.st_size;
-            r->lcm = lcm_eventlog_create(path, "r");
-            if (!r->lcm) e = errno ? errno : EIO;
+            const int rc = loadid_eventlog_open(r->lcm_file, 0, &r->lcm);
+            if (rc != 0) e = rc == LOADID_EVENTLOG_E_SEEK ? ESPIPE : -rc;
         }
     }
     if (e) {
@@ -68,6 +64,13 @@ int loadid_recording_reader_open(const char *dir, loadid_recording_reader_t **ou
     }
     advance_can(r);
     advance_lcm(r);
+    if (r->lcm_state < 0) {
+        /* Not an LCM log at all, or unreadable: nothing to merge. */
+        if (err && errlen) snprintf(err, errlen, "%s: %s", path, loadid_eventlog_error(r->lcm));
+        e = r->lcm_state == LOADID_EVENTLOG_E_NOT_LOG ? EBADMSG : EIO;
+        loadid_recording_reader_close(r);
+        return -e;
+    }
     *out = r;
     return 0;
 }
@@ -76,18 +79,17 @@ void loadid_recording_reader_close(loadid_recording_reader_t *r) {
     if (!r) return;
     loadid_candump_reader_close(r->can);
     if (r->can_file) fclose(r->can_file);
-    if (r->lcm_event) lcm_eventlog_free_event(r->lcm_event);
-    if (r->lcm_given) lcm_eventlog_free_event(r->lcm_given);
-    if (r->lcm) lcm_eventlog_destroy(r->lcm);
+    loadid_eventlog_close(r->lcm);
+    if (r->lcm_file) fclose(r->lcm_file);
     free(r);
 }
 
 int loadid_recording_reader_next(loadid_recording_reader_t *r, loadid_rec_event_t *ev) {
     if (r->lcm_given) {
-        lcm_eventlog_free_event(r->lcm_given);
-        r->lcm_given = NULL;
+        r->lcm_given = 0;
+        advance_lcm(r);
     }
-    if (r->can_state == -EIO) return -EIO;
+    if (r->can_state == -EIO || r->lcm_state < 0) return -EIO;
     memset(ev, 0, sizeof *ev);
     /* A bad line has no time of its own: hand it on at once. */
     if (r->can_state < 0) {
@@ -98,16 +100,16 @@ int loadid_recording_reader_next(loadid_recording_reader_t *r, loadid_rec_event_
         advance_can(r);
         return 1;
     }
-    const int have_can = r->can_state == 1, have_lcm = r->lcm_event != NULL;
+    const int have_can = r->can_state == 1, have_lcm = r->lcm_state == 1;
     if (!have_can && !have_lcm) return 0;
-    if (have_lcm && (!have_can || r->lcm_event->timestamp <= r->can_frame.t_us)) {
+    if (have_lcm && (!have_can || r->lcm_event.timestamp <= r->can_frame.t_us)) {
         ev->kind = LOADID_REC_LCM;
-        ev->t_us = r->lcm_event->timestamp;
-        ev->channel = r->lcm_event->channel;
-        ev->data = r->lcm_event->data;
-        ev->datalen = r->lcm_event->datalen;
-        r->lcm_given = r->lcm_event;
-        advance_lcm(r);
+        ev->t_us = r->lcm_event.timestamp;
+        ev->channel = r->lcm_event.channel;
+        ev->data = r->lcm_event.data;
+        ev->datalen = r->lcm_event.data_len;
+        ev->offset = r->lcm_event.offset;
+        r->lcm_given = 1;
         return 1;
     }
     ev->kind = LOADID_REC_CAN;
@@ -118,6 +120,10 @@ int loadid_recording_reader_next(loadid_recording_reader_t *r, loadid_rec_event_
     return 1;
 }
 
-int loadid_recording_lcm_truncated(const loadid_recording_reader_t *r) {
-    return r->lcm_truncated;
+void loadid_recording_lcm_stats(const loadid_recording_reader_t *r, loadid_eventlog_stats_t *st) {
+    loadid_eventlog_stats(r->lcm, st);
+}
+
+const char *loadid_recording_lcm_error(const loadid_recording_reader_t *r) {
+    return loadid_eventlog_error(r->lcm);
 }

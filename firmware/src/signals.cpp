@@ -87,9 +87,19 @@ int64_t regularise(loadid_signals *s, int64_t t_raw, bool commit) {
         const double measured = double(t_raw) - double(s->pll_last_raw);
         const double pred = s->pll_t + period;
         const double err = double(t_raw) - pred;
+        // Lost messages (refused by the decoder, skipped in a damaged log,
+        // a stalled stream): the stamp lands k whole periods on. That is
+        // no new rate; taking the long interval for the period put the
+        // next stamp a few us after this one and the filters' q'' went
+        // wild (one lost joint state cost RTLS 30 % of the mass).
+        const double k = period > 0 ? std::round((double(t_raw) - s->pll_t) / period) : 0;
+        const double err_k = double(t_raw) - (s->pll_t + k * period);
         if (period > 0 && std::abs(err) <= 0.5 * period) {
             t = pred + g * err;
             period += g * g / 4 * err;  // critically damped
+        } else if (k >= 2 && std::abs(err_k) <= 0.25 * period) {
+            t = s->pll_t + k * period + g * err_k;
+            period += g * g / 4 * err_k / k;
         } else if (measured > 0) {
             period = measured;  // resynchronise: the raw stamp, the last interval
         }

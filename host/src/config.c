@@ -70,6 +70,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->duration_s = 1.5;
     cfg->publish_every = 1;
     cfg->max_missing_share = 0.02;
+    cfg->max_refused_share = 0.1;
     cfg->rescale_s = 0.3;
     cfg->zeroing_window_s = 0.2;
 
@@ -177,6 +178,15 @@ static int read_number(loadid_yaml_node_t *map, const char *key, double *out, si
     if (loadid_yaml_as_double(n, &v) || check_sign(n, v, rule)) return -EINVAL;
     *out = v;
     return 1;
+}
+
+/* A share of the window: a number in [0, 1]. */
+static int read_share(loadid_yaml_node_t *map, const char *key, double *out) {
+    const int rc = read_number(map, key, out, NON_NEGATIVE);
+    if (rc == 1 && *out > 1)
+        return loadid_yaml_fail(loadid_yaml_get(map, key),
+                                "a share of the window's samples: must be <= 1, got %g", *out);
+    return rc;
 }
 
 /* A sequence of min..max numbers (*count of them; count may be NULL when
@@ -506,11 +516,8 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
     TRY(read_number(s, "duration_s", &c->duration_s, POSITIVE));
     TRY(read_int_range(s, "publish_every", &c->publish_every, 1, 1000000));
     TRY(read_number(s, "rescale_s", &c->rescale_s, NON_NEGATIVE));
-    if (read_number(s, "max_missing_share", &c->max_missing_share, NON_NEGATIVE) == 1 &&
-        c->max_missing_share > 1)
-        return loadid_yaml_fail(loadid_yaml_get(s, "max_missing_share"),
-                                "a share of the window's samples: must be <= 1, got %g",
-                                c->max_missing_share);
+    TRY(read_share(s, "max_missing_share", &c->max_missing_share));
+    TRY(read_share(s, "max_refused_share", &c->max_refused_share));
 
     TRY(read_section(root, "zeroing", &s));
     TRY(read_number(s, "window_s", &c->zeroing_window_s, POSITIVE));

@@ -70,17 +70,71 @@ static void log_line(void *ctx, const char *msg) {
     if (verbose || strncmp(msg, "warning: ", 9) == 0) fprintf(stderr, "%s: %s\n", prog, msg);
 }
 
-/* ctx: the trace (NULL without --trace), which counts time from START. */
+/* The sinks' context offline. */
+typedef struct {
+    loadid_trace_csv_t *trace;            /* NULL without --trace */
+    const loadid_offline_report_t *rep;   /* its t_first_us: the recording's start */
+} offline_ctx_t;
+
+/* A state change with its time in seconds since the recording's first
+ * event (the trace counts its own from START). A failure's reason is in
+ * the final message; here with --verbose only. */
 static void state_line(void *ctx, int64_t utime, int state, const char *reason) {
-    if (ctx && state == LOADID_STATE_ESTIMATING) loadid_trace_csv_start(ctx, utime);
+    const offline_ctx_t *c = ctx;
+    if (c->trace && state == LOADID_STATE_ESTIMATING) loadid_trace_csv_start(c->trace, utime);
     static const char *names[] = {"IDLE", "ZEROING", "ESTIMATING", "DONE", "FAILED"};
-    if (verbose || state == LOADID_STATE_FAILED)
-        fprintf(stderr, "%s: %lld: %s%s%s\n", prog, (long long)utime, names[state],
+    const int64_t t0 = c->rep->t_first_us == INT64_MIN ? utime : c->rep->t_first_us;
+    if (verbose)
+        fprintf(stderr, "%s: %.6f s: %s%s%s\n", prog, (double)(utime - t0) / 1e6, names[state],
                 *reason ? ": " : "", reason);
 }
 
 static void trace_row(void *ctx, const loadid_pipeline_estimate_t *e) {
-    loadid_trace_csv_row(ctx, e);
+    loadid_trace_csv_row(((const offline_ctx_t *)ctx)->trace, e);
+}
+
+/* What reading lcm.log found: damage passed over, a truncated end,
+ * messages that could not be decoded. One warning line each. */
+static void lcm_warnings(const char *dir, const loadid_offline_report_t *r) {
+    const loadid_eventlog_stats_t *l = &r->lcm;
+    if (l->damaged)
+        fprintf(stderr, "%s: warning: %s/lcm.log: damaged in %lld place%s, %lld bytes skipped; "
+                "the first: %s\n", prog, dir, (long long)l->damaged, l->damaged == 1 ? "" : "s",
+                (long long)l->skipped_bytes, l->first_problem);
+    if (l->truncated)
+        fprintf(stderr, "%s: warning: %s/lcm.log: cut short: the file ends inside its last event "
+                "(at byte %lld of %lld)\n", prog, dir, (long long)l->truncated_at, (long long)l->size);
+    if (l->oversized)
+        fprintf(stderr, "%s: warning: %s/lcm.log: %lld events of more than %u bytes passed over\n",
+                prog, dir, (long long)l->oversized, (unsigned)LOADID_EVENTLOG_DATA_MAX);
+    const int64_t bad = r->joint_states_bad + r->commands_bad;
+    if (bad)
+        fprintf(stderr, "%s: warning: %s/lcm.log: %lld of %lld joint states and %lld of %lld "
+                "commands could not be decoded; the first: %s\n", prog, dir,
+                (long long)r->joint_states_bad, (long long)r->joint_states,
+                (long long)r->commands_bad, (long long)r->commands, r->first_bad);
+}
+
+/* Why no estimation ran (START never started one), in one line. */
+static void why_not_started(const loadid_config_t *cfg, const loadid_offline_report_t *r,
+                            const loadid_pipeline_status_t *st, char *out, size_t len) {
+    if (st->state == LOADID_STATE_FAILED) {
+        snprintf(out, len, "%s", st->reason);
+        return;
+    }
+    char channel[128];
+    loadid_config_channel(cfg, "LOADID_COMMAND", channel, sizeof channel);
+    int n = r->starts ? snprintf(out, len, "START came, but no estimation ran")
+                      : snprintf(out, len, "no START command on %s in lcm.log", channel);
+    if (r->commands_bad && n > 0 && (size_t)n < len)
+        n += snprintf(out + n, len - (size_t)n, "; %lld command%s could not be decoded",
+                      (long long)r->commands_bad, r->commands_bad == 1 ? "" : "s");
+    if (r->lcm.truncated && n > 0 && (size_t)n < len)
+        n += snprintf(out + n, len - (size_t)n, "; lcm.log is cut short at byte %lld",
+                      (long long)r->lcm.truncated_at);
+    if (r->lcm.damaged && n > 0 && (size_t)n < len)
+        snprintf(out + n, len - (size_t)n, "; lcm.log is damaged (%lld bytes skipped)",
+                 (long long)r->lcm.skipped_bytes);
 }
 
 /* trace_path NULL: no trace, and nothing published before DONE (the
@@ -94,20 +148,23 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
         fprintf(stderr, "%s: --trace: %s\n", prog, err);
         return 1;
     }
-    loadid_pipeline_sink_t sink = {.log = log_line, .state = state_line};
-    if (trace_path) sink.ctx = &trace, sink.estimate = trace_row;
+    loadid_offline_report_t rep;
+    memset(&rep, 0, sizeof rep);
+    rep.t_first_us = INT64_MIN;
+    offline_ctx_t ctx = {.trace = trace_path ? &trace : NULL, .rep = &rep};
+    loadid_pipeline_sink_t sink = {.ctx = &ctx, .log = log_line, .state = state_line};
+    if (trace_path) sink.estimate = trace_row;
     loadid_pipeline_t *p = NULL;
     int rc = loadid_pipeline_create(cfg, chain, &sink, trace_path ? publish_every : 0, &p, err,
                                     sizeof err);
-    int truncated = 0;
-    if (rc == 0) rc = loadid_offline_run(p, dir, &truncated, err, sizeof err);
+    if (rc == 0) rc = loadid_offline_run(p, dir, &rep, err, sizeof err);
     if (rc != 0) {
         fprintf(stderr, "%s: %s\n", prog, err);
         loadid_pipeline_destroy(p);
         if (trace_path) loadid_trace_csv_close(&trace, err, sizeof err);
         return 1;
     }
-    if (truncated) fprintf(stderr, "%s: warning: %s/lcm.log ends in a damaged event\n", prog, dir);
+    lcm_warnings(dir, &rep);
     loadid_pipeline_status_t st;
     loadid_pipeline_status(p, &st);
     if (verbose)
@@ -119,46 +176,57 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
                 (long long)st.samples_saturated, (long long)st.samples_faulty,
                 (long long)st.sequence_gaps, (long long)st.joint_msgs_bad,
                 (long long)st.samples_stale);
+    if (verbose)
+        fprintf(stderr,
+                "%s: lcm.log: %lld events (joint states %lld, commands %lld, other %lld), "
+                "damaged %lld (%lld bytes skipped), %s\n",
+                prog, (long long)rep.lcm.events, (long long)rep.joint_states,
+                (long long)rep.commands, (long long)rep.other_events, (long long)rep.lcm.damaged,
+                (long long)rep.lcm.skipped_bytes, rep.lcm.truncated ? "cut short" : "complete");
     const loadid_noise_levels_t *l = &st.noise;
-    if (verbose && loadid_pipeline_started(p))
+    const int started = loadid_pipeline_started(p);
+    if (verbose && started)
         fprintf(stderr,
                 "%s: noise levels (channels from %s): f %.3g N, tau %.3g N m, a - g %.3g m/s^2, "
                 "alpha %.3g rad/s^2, omega %.3g rad/s\n",
                 prog, loadid_noise_source_name(l->channel_source), l->force, l->torque, l->spec,
                 l->alpha, l->omega);
+    /* Incomplete (DESIGN.md): no START or ZERO, the window cut short or
+     * without data; FAILED is always one of these. */
+    char why[320] = "";
+    if (!started)
+        why_not_started(cfg, &rep, &st, why, sizeof why);
+    else if (!st.complete)
+        snprintf(why, sizeof why, "%s", st.incomplete_reason[0] ? st.incomplete_reason : st.reason);
+    loadid_pipeline_estimate_t fin;
+    loadid_pipeline_compensation_t comp;
+    char path[4400];
+    if (started && st.complete && cfg->results_directory[0] &&
+        loadid_pipeline_final(p, &fin, &comp) == 0) {
+        if (loadid_saved_result_write(cfg->results_directory, &fin, &comp, path, sizeof path, err,
+                                      sizeof err) != 0)
+            fprintf(stderr, "%s: %s\n", prog, err);
+        else if (verbose)
+            fprintf(stderr, "%s: saved %s\n", prog, path);
+    }
+    loadid_pipeline_estimate_t est[LOADID_MAX_METHODS];
+    const int n = loadid_pipeline_estimates(p, est, LOADID_MAX_METHODS);
+    for (int i = 0; i < n && !started; ++i)
+        snprintf(est[i].why, sizeof est[i].why, "no estimation ran");
+    st.complete = started && st.complete;
+    loadid_refined_report_t ref;
+    const int have_ref = loadid_pipeline_refined_report(p, &ref) == 0;
     int status = 0;
-    if (!loadid_pipeline_started(p)) {
-        fprintf(stderr, "%s: %s: no START command in lcm.log: nothing was estimated\n", prog, dir);
+    FILE *out = result_path ? fopen(result_path, "w") : stdout;
+    if (!out || loadid_result_json_write(out, est, n, &st, have_ref ? &ref : NULL) != 0 ||
+        (result_path && fclose(out) != 0)) {
+        fprintf(stderr, "%s: cannot write %s: %s\n", prog, result_path ? result_path : "stdout",
+                strerror(errno));
         status = 1;
-    } else if (st.state == LOADID_STATE_FAILED) {
-        fprintf(stderr, "%s: %s: estimation failed: %s\n", prog, dir, st.reason);
-        status = 1;
-    } else {
-        loadid_pipeline_estimate_t fin;
-        loadid_pipeline_compensation_t comp;
-        char path[4400];
-        if (cfg->results_directory[0] && loadid_pipeline_final(p, &fin, &comp) == 0) {
-            if (loadid_saved_result_write(cfg->results_directory, &fin, &comp, path, sizeof path,
-                                          err, sizeof err) != 0)
-                fprintf(stderr, "%s: %s\n", prog, err);
-            else if (verbose)
-                fprintf(stderr, "%s: saved %s\n", prog, path);
-        }
-        loadid_pipeline_estimate_t est[LOADID_MAX_METHODS];
-        const int n = loadid_pipeline_estimates(p, est, LOADID_MAX_METHODS);
-        loadid_refined_report_t ref;
-        const int have_ref = loadid_pipeline_refined_report(p, &ref) == 0;
-        FILE *out = result_path ? fopen(result_path, "w") : stdout;
-        if (!out || loadid_result_json_write(out, est, n, &st, have_ref ? &ref : NULL) != 0 ||
-            (result_path && fclose(out) != 0)) {
-            fprintf(stderr, "%s: cannot write %s: %s\n", prog, result_path ? result_path : "stdout",
-                    strerror(errno));
-            status = 1;
-        } else if (!st.complete) {
-            fprintf(stderr, "%s: %s: incomplete recording: %s%s\n", prog, dir,
-                    st.incomplete_reason, allow_incomplete ? " (allowed)" : "");
-            if (!allow_incomplete) status = 3;
-        }
+    } else if (!st.complete) {
+        fprintf(stderr, "%s: %s: incomplete recording: %s%s\n", prog, dir, why,
+                allow_incomplete ? " (allowed)" : "");
+        if (!allow_incomplete) status = 3;
     }
     loadid_pipeline_destroy(p);
     if (trace_path && loadid_trace_csv_close(&trace, err, sizeof err) != 0) {
@@ -206,9 +274,19 @@ int main(int argc, char **argv) {
             default: usage(stderr); return 2;
         }
     }
-    if (optind != argc || !config_path) {
+    if (optind != argc) {
+        /* A recording named without --offline, most likely. */
+        fprintf(stderr, "%s: unexpected argument %s%s\n", prog, argv[optind],
+                offline ? "" : " (a recording is read with --offline DIR)");
+        return 2;
+    }
+    if (!config_path) {
         fprintf(stderr, "%s: --config FILE is required\n", prog);
         usage(stderr);
+        return 2;
+    }
+    if (allow_incomplete && !offline) {
+        fprintf(stderr, "%s: --allow-incomplete needs --offline\n", prog);
         return 2;
     }
     if (result && !offline) {

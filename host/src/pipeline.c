@@ -17,6 +17,10 @@
 #define PENDING_MAX 512 /* samples waiting for joint data (and the fixed lag): 0.5 s at 1 kHz */
 #define NOISE_MAX_GAP_US 20000 /* third differences need consecutive samples */
 #define COMMANDS_MAX 16 /* commands waiting for the fixed lag (50 ms: a few at most) */
+/* A pause between F/T samples longer than this is time without F/T data
+ * (completeness): 20 samples of the JR3 at 1 kHz; for the Modbus sensor
+ * at least 4 of its poll periods. */
+#define FT_GAP_US 20000
 
 struct loadid_pipeline {
     loadid_config_t cfg;
@@ -52,8 +56,14 @@ struct loadid_pipeline {
     /* completeness of the last run */
     int zero_seen;
     int complete;
-    char incomplete_reason[192];
+    char incomplete_reason[256];
     int64_t stale_at_start;
+    int64_t ft_gap_us;            /* FT_GAP_US, or the Modbus sensor's */
+    int64_t cover_prev_us;        /* the window's last F/T sample so far (START at first) */
+    int64_t missing_us;           /* time of the window without F/T samples */
+    int64_t win_samples;          /* the window's F/T samples, usable or refused */
+    int64_t win_saturated, win_faulty; /* of which refused, saturated or faulty */
+    int64_t incomplete_at_start;  /* the decoder's samples_incomplete at START */
 
     int state;
     char reason[192];
@@ -111,6 +121,12 @@ static void note(loadid_pipeline_t *p, const char *fmt, ...) {
 static void set_state(loadid_pipeline_t *p, int64_t utime, int state, const char *reason) {
     p->state = state;
     snprintf(p->reason, sizeof p->reason, "%s", reason ? reason : "");
+    if (state == LOADID_STATE_FAILED) {
+        /* Every failure is of missing data (ZERO, or the data of its
+         * window): no complete run. */
+        p->complete = 0;
+        snprintf(p->incomplete_reason, sizeof p->incomplete_reason, "%s", p->reason);
+    }
     if (p->sink.state) p->sink.state(p->sink.ctx, utime, state, p->reason);
 }
 
@@ -127,6 +143,10 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
     p->refined_m = -1;
     p->row_rescale[0] = p->row_rescale[1] = p->row_rescale[2] = 1;
     p->has_accel = cfg->sensor_type == LOADID_SENSOR_JR3;
+    p->ft_gap_us = FT_GAP_US;
+    if (cfg->sensor_type == LOADID_SENSOR_MODBUS && cfg->modbus_rate_hz > 0 &&
+        4e6 / cfg->modbus_rate_hz > FT_GAP_US)
+        p->ft_gap_us = (int64_t)llround(4e6 / cfg->modbus_rate_hz);
     for (int i = 0; i < 10; ++i) p->distal[i] = (loadid_real_t)cfg->distal_phi[i];
     loadid_model_config_default(&p->model_cfg);
     p->model_cfg.mass_rel_std = (loadid_real_t)cfg->model_mass_rel_std;
@@ -319,26 +339,62 @@ static int best_method(const loadid_pipeline_t *p) {
     return best;
 }
 
-/* Why the run that just ended is not complete ("" when it is). */
+/* Why the run that just ended at utime (by its window's end or STOP, or
+ * because the input ended) is not complete ("" when it is): in this order,
+ * no ZERO, the recording ending inside the window, time without F/T
+ * samples or samples without joint data beyond estimation.max_missing_share,
+ * refused F/T samples beyond estimation.max_refused_share. */
 static void check_complete(loadid_pipeline_t *p, int64_t utime, int by_stop) {
-    const char *why = "";
-    char buf[192];
+    char why[sizeof p->incomplete_reason] = "";
     loadid_signals_stats_t s;
     loadid_signals_stats(p->sig, &s);
+    loadid_jr3_stats_t j;
+    loadid_jr3_decoder_stats(p->jr3, &j);
     const int64_t stale = s.samples_stale + s.samples_no_joints - p->stale_at_start;
+    /* The window as it ran: to its end, to STOP, or to the input's end. */
+    const int64_t end = utime < p->est_end_us ? utime : p->est_end_us;
+    const double window_s = (double)(end - p->start_us) / 1e6;
+    int64_t missing = p->missing_us;
+    const int64_t tail = end - p->cover_prev_us;
+    if (tail > p->ft_gap_us) missing += tail;
+    const int64_t incomplete = j.samples_incomplete - p->incomplete_at_start;
+    const int64_t refused = p->win_saturated + p->win_faulty + incomplete;
+    const int64_t joints_end = loadid_signals_newest_joint_time(p->sig);
+    int n = 0;
     if (p->n_params == LOADID_NPHI && !p->zero_seen) {
-        why = "no ZERO before START";
+        n = snprintf(why, sizeof why, "no ZERO before START");
     } else if (!by_stop && utime < p->est_end_us) {
-        snprintf(buf, sizeof buf, "the input ended %.3f s before the estimation window did",
-                 (double)(p->est_end_us - utime) / 1e6);
-        why = buf;
+        n = snprintf(why, sizeof why,
+                     "the recording ends %.3f s after START, %.3f s before the estimation window "
+                     "does", window_s, (double)(p->est_end_us - utime) / 1e6);
+    } else if ((double)missing > p->cfg.max_missing_share * (double)(end - p->start_us)) {
+        n = snprintf(why, sizeof why, "no F/T sample for %.3f s of the %.3f s window",
+                     (double)missing / 1e6, window_s);
+        if (tail > p->ft_gap_us && n > 0 && (size_t)n < sizeof why)
+            n += snprintf(why + n, sizeof why - (size_t)n, " (the last %.3f s of it)",
+                          (double)tail / 1e6);
+        if (n > 0 && (size_t)n < sizeof why)
+            snprintf(why + n, sizeof why - (size_t)n,
+                     ", more than %.3g %% (estimation.max_missing_share)",
+                     p->cfg.max_missing_share * 100);
     } else if ((double)stale > p->cfg.max_missing_share * (double)(stale + p->samples_used)) {
-        snprintf(buf, sizeof buf,
-                 "joint data missing for %lld of the window's %lld samples (more than %.3g %%, "
-                 "estimation.max_missing_share)",
-                 (long long)stale, (long long)(stale + p->samples_used),
-                 p->cfg.max_missing_share * 100);
-        why = buf;
+        n = snprintf(why, sizeof why,
+                     "joint data missing for %lld of the window's %lld samples (more than %.3g %%, "
+                     "estimation.max_missing_share)",
+                     (long long)stale, (long long)(stale + p->samples_used),
+                     p->cfg.max_missing_share * 100);
+        if (joints_end != INT64_MIN && end - joints_end > p->ft_gap_us && n > 0 &&
+            (size_t)n < sizeof why)
+            snprintf(why + n, sizeof why - (size_t)n,
+                     "; the joint states end %.3f s before the window does",
+                     (double)(end - joints_end) / 1e6);
+    } else if ((double)refused > p->cfg.max_refused_share * (double)(p->win_samples + incomplete)) {
+        snprintf(why, sizeof why,
+                 "%lld of the window's %lld F/T samples refused (saturated %lld, faulty %lld, "
+                 "incomplete %lld), more than %.3g %% (estimation.max_refused_share)",
+                 (long long)refused, (long long)(p->win_samples + incomplete),
+                 (long long)p->win_saturated, (long long)p->win_faulty, (long long)incomplete,
+                 p->cfg.max_refused_share * 100);
     }
     p->complete = why[0] == 0;
     snprintf(p->incomplete_reason, sizeof p->incomplete_reason, "%s", why);
@@ -618,6 +674,11 @@ static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const c
                 loadid_signals_stats_t s;
                 loadid_signals_stats(p->sig, &s);
                 p->stale_at_start = s.samples_stale + s.samples_no_joints;
+                loadid_jr3_stats_t j;
+                loadid_jr3_decoder_stats(p->jr3, &j);
+                p->incomplete_at_start = j.samples_incomplete;
+                p->cover_prev_us = utime;
+                p->missing_us = p->win_samples = p->win_saturated = p->win_faulty = 0;
             }
             snprintf(p->load_name, sizeof p->load_name, "%s", load_name ? load_name : "");
             p->started = 1;
@@ -717,7 +778,20 @@ static int data_matrix(const loadid_pipeline_t *p, const loadid_regressor_input_
     return loadid_regressor_model(in->spec, in->omega, in->alpha, p->n_params, p->g_init, A);
 }
 
+/* Completeness: the window's F/T samples, usable or refused, and the time
+ * between them. */
+static void cover(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
+    if (p->state != LOADID_STATE_ESTIMATING) return;
+    if (s->t_us - p->cover_prev_us > p->ft_gap_us) p->missing_us += s->t_us - p->cover_prev_us;
+    if (s->t_us > p->cover_prev_us) p->cover_prev_us = s->t_us;
+    p->win_samples++;
+    p->win_saturated += s->saturated && !s->faulty;
+    p->win_faulty += s->faulty;
+}
+
 static void on_sample(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
+    cover(p, s);
+    if (s->saturated || s->faulty) return; /* queued for cover() only: never fed */
     loadid_real_t y[6], lin[3], ang[3];
     for (int i = 0; i < 3; ++i) {
         y[i] = (loadid_real_t)s->value[LOADID_JR3_FORCE][i];
@@ -815,6 +889,12 @@ void loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *f
     const int rc = loadid_jr3_decoder_feed(p->jr3, frame, &out);
     if (rc == LOADID_JR3_SAMPLE) {
         enqueue(p, &out.sample);
+    } else if (rc == LOADID_JR3_E_SATURATED || rc == LOADID_JR3_E_FAULT) {
+        /* Refused (counted by the decoder), but it takes its place in the
+         * queue: the window's completeness counts it, in time order. */
+        out.sample.saturated = out.sample.saturated || rc == LOADID_JR3_E_SATURATED;
+        out.sample.faulty = out.sample.faulty || rc == LOADID_JR3_E_FAULT;
+        enqueue(p, &out.sample);
     } else if (rc == LOADID_JR3_FULL_SCALE) {
         const loadid_jr3_full_scale_change_t *c = &out.full_scale;
         note(p, "JR3 %s full scale now %g %g %g (was %g %g %g)", loadid_jr3_group_name(c->group),
@@ -835,10 +915,17 @@ void loadid_pipeline_ft_sample(loadid_pipeline_t *p, int64_t t_us, const double 
                                const double torque[3], int saturated, int faulty) {
     if (!p) return;
     if (faulty || saturated) {
-        /* Never fed (as the JR3's E_SATURATED / E_FAULT). */
+        /* Never fed (as the JR3's E_SATURATED / E_FAULT); queued for the
+         * window's completeness only. */
         p->ft_saturated += saturated != 0;
         p->ft_faulty += faulty != 0;
         p->ft_rejected++;
+        loadid_jr3_sample_t r;
+        memset(&r, 0, sizeof r);
+        r.t_us = t_us;
+        r.saturated = saturated != 0;
+        r.faulty = faulty != 0;
+        enqueue(p, &r);
         return;
     }
     if (!force || !torque) {

@@ -40,9 +40,8 @@
 #include <sys/resource.h>
 #include <time.h>
 
-#include "lcmtypes/loadid_command_t.h"
-#include "lcmtypes/loadid_joint_state_t.h"
 #include "loadid/config.h"
+#include "loadid/lcm_wire.h"
 #include "loadid/offline.h"
 #include "loadid/pipeline.h"
 #include "loadid/recording.h"
@@ -100,22 +99,20 @@ static event_t *load_events(const char *dir, int *count, int64_t *last) {
             continue;
         }
         if (strcmp(ev.channel, "LOADID_JOINTS") == 0) {
-            loadid_joint_state_t m;
-            if (loadid_joint_state_t_decode(ev.data, 0, ev.datalen, &m) < 0) continue;
+            loadid_lcm_joint_state_t m;
+            if (loadid_lcm_decode_joint_state(ev.data, (size_t)ev.datalen, &m) < 0) continue;
             e->kind = 0;
             e->t_us = m.utime;
             e->num_joints = m.num_joints < LOADID_MAX_JOINTS ? m.num_joints : LOADID_MAX_JOINTS;
             memcpy(e->position, m.position, (size_t)e->num_joints * sizeof(double));
             memcpy(e->setpoint, m.setpoint, (size_t)e->num_joints * sizeof(double));
-            loadid_joint_state_t_decode_cleanup(&m);
             ++n;
         } else if (strcmp(ev.channel, "LOADID_COMMAND") == 0) {
-            loadid_command_t m;
-            if (loadid_command_t_decode(ev.data, 0, ev.datalen, &m) < 0) continue;
+            loadid_lcm_command_t m;
+            if (loadid_lcm_decode_command(ev.data, (size_t)ev.datalen, &m) < 0) continue;
             e->kind = -1;
             e->action = m.action;
             snprintf(e->load_name, sizeof e->load_name, "%s", m.load_name);
-            loadid_command_t_decode_cleanup(&m);
             ++n;
         }
     }

@@ -224,7 +224,7 @@ def test_channel_prefix_reads_its_own_channels(recording, tmp_path):
     dst.close()
     plain = write_config(tmp_path / "plain.yaml")
     r = offline(plain, rec, check=False)
-    assert r.returncode == 1 and "no START" in r.stderr
+    assert r.returncode == 3 and "no START command on LOADID_COMMAND in lcm.log" in r.stderr
     cfg = write_config(tmp_path / "r2.yaml", "lcm:\n  channel_prefix: R2_\n")
     result, _ = offline(cfg, rec)
     expected, _ = offline(plain, recording)
@@ -365,6 +365,207 @@ def test_bad_input_gives_one_line_and_non_zero(recording, tmp_path):
     (no_start / "lcm.log").write_bytes(b"")
     r = offline(cfg, no_start, check=False)
     assert r.returncode != 0 and "no START" in r.stderr
+
+
+# ---------------------------------------------------------------- damage
+# lcm.log is parsed here with struct, from LCM's format (sync word, event
+# number, time, channel length, data length, channel, data; big-endian),
+# independently of the service's reader.
+
+def lcm_events(path):
+    """(offset, time, channel, data offset, data length) of every event."""
+    import struct
+    b = path.read_bytes()
+    out, off = [], 0
+    while off < len(b):
+        sync, _, t, cl, dl = struct.unpack(">IqqII", b[off:off + 28])
+        assert sync == 0xEDA1DA01
+        out.append((off, t, b[off + 28:off + 28 + cl].decode(), off + 28 + cl, dl))
+        off += 28 + cl + dl
+    return out
+
+
+def copy_recording(rec, dest):
+    dest.mkdir()
+    for name in ("can.log", "lcm.log", "truth.yaml"):
+        shutil.copy(rec / name, dest / name)
+    return dest
+
+
+def joint_state_at(rec, t_us):
+    """The first LOADID_JOINTS event at or after t_us."""
+    return next(e for e in lcm_events(rec / "lcm.log") if e[2] == "LOADID_JOINTS" and e[1] >= t_us)
+
+
+def test_damaged_lcm_log_is_read_past_and_counted(recording, tmp_path):
+    """One byte of num_joints corrupted (lcm-gen's decoder overflowed the
+    heap on it) and an event's length set to 0x7fffffff (liblcm's reader
+    asked for 2 GiB): no crash, the bad message counted, the damage warned
+    about with its byte offset, every line prefixed, and the estimate
+    still that of the clean recording to within noise."""
+    import struct
+    start = int(read_truth(recording)["times.start"])
+    cfg = write_config(tmp_path / "c.yaml")
+    clean, _ = offline(cfg, recording)
+    phi, _ = truth_phi(recording)
+
+    rec = copy_recording(recording, tmp_path / "num_joints")
+    ev = joint_state_at(rec, start + 500_000)
+    b = bytearray((rec / "lcm.log").read_bytes())
+    assert struct.unpack(">i", b[ev[3] + 16:ev[3] + 20])[0] == 6  # fingerprint, utime, num_joints
+    b[ev[3] + 16] = 0x40  # num_joints 0x40000006
+    (rec / "lcm.log").write_bytes(b)
+    result, err = offline(cfg, rec, "--verbose")
+    assert "joint msgs bad 1," in err, err
+    assert (f"1 of 3300 joint states and 0 of 2 commands could not be decoded; the first: "
+            f"LOADID_JOINTS at byte {ev[0]} of lcm.log: num_joints out of range") in err, err
+    assert all(l.startswith("loadidd: ") for l in err.splitlines()), err
+    for r, c in zip(result, clean):
+        assert r["complete"] is True and r["samples"] == 1500
+        assert abs(r["mass"] - c["mass"]) < 1e-3 * c["mass"], (r["mass"], c["mass"])
+    assert_close_to_truth(result[0], phi)
+
+    rec = copy_recording(recording, tmp_path / "length")
+    ev = joint_state_at(rec, start + 700_000)
+    b = bytearray((rec / "lcm.log").read_bytes())
+    b[ev[0] + 24:ev[0] + 28] = struct.pack(">I", 0x7FFFFFFF)
+    (rec / "lcm.log").write_bytes(b)
+    result, err = offline(cfg, rec, "--verbose")
+    size = ev[3] + ev[4] - ev[0]
+    assert (f"lcm.log: damaged in 1 place, {size} bytes skipped; the first: byte {ev[0]}: data "
+            f"length 2147483647 in the event header runs past the end of the file") in err, err
+    assert all(l.startswith("loadidd: ") for l in err.splitlines()), err
+    assert "joint states 3299," in err
+    for r, c in zip(result, clean):
+        assert r["complete"] is True
+        assert abs(r["mass"] - c["mass"]) < 1e-3 * c["mass"], (r["mass"], c["mass"])
+
+
+def cut_lcm_log(rec, t_us):
+    """lcm.log cut in the middle of the first event at or after t_us."""
+    ev = next(e for e in lcm_events(rec / "lcm.log") if e[1] >= t_us)
+    b = (rec / "lcm.log").read_bytes()
+    (rec / "lcm.log").write_bytes(b[:ev[0] + 50])
+    return ev
+
+
+def cut_can_log(rec, t_us):
+    """can.log cut in the middle of the first line at or after t_us; the
+    time of the last base+0 frame kept (the last sample's time)."""
+    lines = (rec / "can.log").read_text().splitlines(keepends=True)
+    times = [int(l[1:11]) * 1_000_000 + int(l[12:18]) for l in lines]
+    n = next(i for i, t in enumerate(times) if t >= t_us)
+    (rec / "can.log").write_text("".join(lines[:n]) + lines[n][:20])
+    return max(t for t, l in zip(times[:n], lines[:n]) if " 1A0#" in l)
+
+
+def test_cut_short_recordings_are_incomplete(recording, tmp_path):
+    """An lcm.log or a can.log cut short 0.5 s into the window, the other
+    file whole: "complete": false, the reason on stderr and exit status 3;
+    with --allow-incomplete the same JSON and exit status 0. The missing
+    time is the window's end minus the last sample kept in can.log."""
+    start = int(read_truth(recording)["times.start"])
+    cfg = write_config(tmp_path / "c.yaml")
+
+    rec = copy_recording(recording, tmp_path / "lcm_cut")
+    ev = cut_lcm_log(rec, start + 500_000)
+    r = offline(cfg, rec, check=False)
+    assert r.returncode == 3, r.stderr
+    result = json.loads(r.stdout)
+    assert all(e["complete"] is False for e in result)
+    assert f"lcm.log: cut short: the file ends inside its last event (at byte {ev[0]} of " in r.stderr
+    m = re.search(r"incomplete recording: joint data missing for (\d+) of the window's (\d+) "
+                  r"samples .*; the joint states end ([\d.]+) s before the window does", r.stderr)
+    assert m, r.stderr
+    # 1 s of the 1.5 s without joint states, and the 50 ms before it that
+    # the fixed-lag smoother (kalman.lag_s) could not serve.
+    assert int(m.group(2)) == 1500 and 1000 <= int(m.group(1)) <= 1055
+    assert float(m.group(3)) == pytest.approx(1.0, abs=0.002)
+    allowed, err = offline(cfg, rec, "--allow-incomplete")
+    assert allowed == result and "(allowed)" in err
+
+    rec = copy_recording(recording, tmp_path / "can_cut")
+    last = cut_can_log(rec, start + 500_000)
+    r = offline(cfg, rec, check=False)
+    assert r.returncode == 3, r.stderr
+    result = json.loads(r.stdout)
+    assert all(e["complete"] is False and e["samples"] <= 501 for e in result)
+    m = re.search(r"incomplete recording: no F/T sample for ([\d.]+) s of the 1\.500 s window "
+                  r"\(the last ([\d.]+) s of it\), more than 2 % \(estimation.max_missing_share\)",
+                  r.stderr)
+    assert m, r.stderr
+    missing = (start + 1_500_000 - last) / 1e6
+    assert float(m.group(1)) == pytest.approx(missing, abs=1e-3)
+    assert float(m.group(2)) == pytest.approx(missing, abs=1e-3)
+    allowed, err = offline(cfg, rec, "--allow-incomplete")
+    assert allowed == result and "(allowed)" in err
+    # estimation.max_missing_share: 1 lets the same recording pass.
+    lax = write_config(tmp_path / "lax.yaml", "estimation:\n  max_missing_share: 1\n")
+    passed, _ = offline(lax, rec)
+    assert all(e["complete"] is True for e in passed)
+
+
+def test_refused_samples_beyond_the_limit_are_incomplete(trajectory, tmp_path):
+    """15 % of the samples saturated: more than estimation.max_refused_share
+    (10 %) of the window refused; counted from the decoder's output here."""
+    rec = simulate(tmp_path / "rec", trajectory, "--damage", "saturate=0.15")
+    cfg = write_config(tmp_path / "c.yaml")
+    r = offline(cfg, rec, check=False)
+    assert r.returncode == 3, r.stderr
+    result = json.loads(r.stdout)
+    truth = read_truth(rec)
+    start = int(truth["times.start"])
+    out = run_tool([program("LOADID_JR3_DECODE_LOG"), rec / "can.log"]).stdout
+    window = [l.split() for l in out.splitlines() if l.startswith("S ")]
+    window = [f for f in window if start <= int(f[2]) < start + 1_500_000]
+    usable = sum(1 for f in window if int(f[1]) == 1)
+    refused = len(window) - usable
+    assert refused > 0.1 * len(window)
+    assert result[0]["samples"] == usable
+    assert (f"incomplete recording: {refused} of the window's {len(window)} F/T samples refused "
+            f"(saturated {refused}, faulty 0, incomplete 0), more than 10 % "
+            "(estimation.max_refused_share)") in r.stderr, r.stderr
+    lax = write_config(tmp_path / "lax.yaml", "estimation:\n  max_refused_share: 0.5\n")
+    passed, _ = offline(lax, rec)
+    assert all(e["complete"] is True for e in passed)
+
+
+def test_messages_say_what_went_wrong(recording, trajectory, tmp_path):
+    cfg = write_config(tmp_path / "c.yaml")
+    # Random bytes for lcm.log: not an LCM log, with the offset; no JSON.
+    rec = copy_recording(recording, tmp_path / "random")
+    (rec / "lcm.log").write_bytes(np.random.default_rng(7).bytes(50_000))
+    r = offline(cfg, rec, check=False)
+    assert r.returncode == 1 and r.stdout == ""
+    assert r.stderr.startswith(f"loadidd: {rec}/lcm.log: not an LCM log: byte 0 holds 0x")
+    assert "no event follows in its 50000 bytes" in r.stderr and len(r.stderr.splitlines()) == 1
+    # A recording named without --offline: said so, not "--config is required".
+    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(cfg), str(recording)],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.splitlines()[0] == (f"loadidd: unexpected argument {recording} (a recording "
+                                        "is read with --offline DIR)")
+    assert "--config FILE is required" not in r.stderr
+    # START there but no ZERO (zeroing): the failure, not "no START"; JSON
+    # with every method unestimated, exit 3, or 0 with --allow-incomplete.
+    sim = write_config(tmp_path / "sim.yaml", "simulation:\n  zero: false\n")
+    rec = simulate(tmp_path / "nozero", trajectory, "--config", sim)
+    r = offline(cfg, rec, check=False)
+    assert r.returncode == 3 and "no START" not in r.stderr, r.stderr
+    assert ("incomplete recording: START before a completed ZERO (estimation.offset_model is "
+            "zeroing)") in r.stderr, r.stderr
+    result = json.loads(r.stdout)
+    assert all(e["complete"] is False and e["samples"] == 0 and e["error"] for e in result)
+    allowed, _ = offline(cfg, rec, "--allow-incomplete")
+    assert allowed == result
+    # --verbose: state changes in seconds since the recording's first event.
+    _, err = offline(cfg, recording, "--verbose")
+    truth = read_truth(recording)
+    first = min(lcm_events(recording / "lcm.log")[0][1],
+                int((recording / "can.log").read_text()[1:18].replace(".", "")))
+    start = (int(truth["times.start"]) - first) / 1e6
+    assert f"loadidd: {start:.6f} s: ESTIMATING" in err.splitlines(), err
+    assert not re.search(r"loadidd: 1[67]\d{14}", err)  # no raw microseconds
 
 
 TRACE_HEADER = ("t_s,method,valid,samples,mass,com_x,com_y,com_z,ixx,ixy,ixz,iyy,iyz,izz,"

@@ -172,6 +172,8 @@ static void assert_defaults(const loadid_config_t *c) {
     assert_int_equal(c->offset_model_estimate, 0);
     ASSERT_EQ_D(c->duration_s, 1.5);
     assert_int_equal(c->publish_every, 1);
+    ASSERT_EQ_D(c->max_missing_share, 0.02);
+    ASSERT_EQ_D(c->max_refused_share, 0.1);
     ASSERT_EQ_D(c->zeroing_window_s, 0.2);
     assert_doubles(c->distal_phi, (const double[10]){0}, 10, "distal_phi");
 
@@ -299,6 +301,8 @@ static const char kEveryKey[] =
     "  offset_model: estimate\n"
     "  duration_s: 3\n"
     "  publish_every: 20\n"
+    "  max_missing_share: 0.05\n"
+    "  max_refused_share: 0\n"
     "zeroing:\n"
     "  window_s: 0.5\n"
     "distal:\n"
@@ -378,6 +382,8 @@ static void every_key_is_read(void **state) {
     assert_int_equal(c.offset_model_estimate, 1);
     ASSERT_EQ_D(c.duration_s, 3);
     assert_int_equal(c.publish_every, 20);
+    ASSERT_EQ_D(c.max_missing_share, 0.05);
+    ASSERT_EQ_D(c.max_refused_share, 0);
     ASSERT_EQ_D(c.zeroing_window_s, 0.5);
     assert_doubles(c.distal_phi,
                    (const double[]){0.2, 0.001, -0.002, 0.0008, 1e-4, 0, 0, 1.5e-4, 0, 1.6e-4}, 10,
@@ -650,6 +656,16 @@ static void wrong_lengths_and_values(void **state) {
     expect_error("estimation:\n  duration_s: 0\n", "2: estimation.duration_s: must be > 0, got 0");
     expect_error("noise:\n  force: 0.1\n  torque: -0.005\n", "3: noise.torque: must be > 0, got -0.005");
     expect_error("zeroing:\n  window_s: 0\n", "2: zeroing.window_s: must be > 0, got 0");
+    expect_error("estimation:\n  max_refused_share: 1.5\n",
+                 "2: estimation.max_refused_share: a share of the window's samples: must be <= 1, "
+                 "got 1.5");
+    expect_error("estimation:\n  max_refused_share: -0.1\n",
+                 "2: estimation.max_refused_share: must be >= 0, got -0.1");
+    expect_error("estimation:\n  max_missing_share: 2\n",
+                 "2: estimation.max_missing_share: a share of the window's samples: must be <= 1, "
+                 "got 2");
+    expect_error("estimation:\n  max_missing_share: -1\n",
+                 "2: estimation.max_missing_share: must be >= 0, got -1");
     expect_error("kalman:\n  meas_sigma: 0\n", "2: kalman.meas_sigma: must be > 0, got 0");
     expect_error("simulation:\n  backlash: -1e-4\n", "2: simulation.backlash: must be >= 0, got -0.0001");
     expect_error("trajectory:\n  harmonics: 0\n", "2: trajectory.harmonics: must be >= 1, got 0");

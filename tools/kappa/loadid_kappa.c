@@ -23,11 +23,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lcmtypes/loadid_command_t.h"
-#include "lcmtypes/loadid_joint_state_t.h"
 #include "loadid/config.h"
 #include "loadid/core.h"
 #include "loadid/jr3.h"
+#include "loadid/lcm_wire.h"
+#include "loadid/pipeline.h"
 #include "loadid/recording.h"
 #include "loadid/setup.h"
 
@@ -46,6 +46,7 @@ typedef struct {
     loadid_real_t g_init[3];
     int64_t zero_us, start_us, end_us;
     int64_t samples, refused;
+    int64_t bad_messages;             /* joint states and commands not decodable */
     char load_name[128];
 } kappa_run_t;
 
@@ -68,34 +69,40 @@ static int data_matrix(const kappa_run_t *k, const loadid_real_t spec[3],
     return loadid_regressor_model(spec, omega, alpha, k->n_params, k->g_init, A);
 }
 
+/* Joint states and commands through the service's decoder (lcm_wire.h),
+ * which bounds num_joints and the strings; what it refuses is counted. */
 static void on_joints(kappa_run_t *k, const loadid_rec_event_t *ev) {
-    loadid_joint_state_t msg;
-    if (loadid_joint_state_t_decode(ev->data, 0, ev->datalen, &msg) < 0) return;
+    loadid_lcm_joint_state_t msg;
+    if (loadid_lcm_decode_joint_state(ev->data, (size_t)ev->datalen, &msg) < 0) {
+        k->bad_messages++;
+        return;
+    }
     loadid_real_t pos[LOADID_MAX_JOINTS], set[LOADID_MAX_JOINTS];
     const int n = msg.num_joints;
     if (n >= 1 && n <= LOADID_MAX_JOINTS) {
         for (int i = 0; i < n; ++i) pos[i] = (loadid_real_t)msg.position[i], set[i] = (loadid_real_t)msg.setpoint[i];
         loadid_signals_push_joints(k->sig, msg.utime, n, pos, set); /* bad ones are counted there */
     }
-    loadid_joint_state_t_decode_cleanup(&msg);
 }
 
 static void on_command(kappa_run_t *k, const loadid_rec_event_t *ev) {
-    loadid_command_t msg;
-    if (loadid_command_t_decode(ev->data, 0, ev->datalen, &msg) < 0) return;
-    if (msg.action == LOADID_COMMAND_T_ZERO) {
+    loadid_lcm_command_t msg;
+    if (loadid_lcm_decode_command(ev->data, (size_t)ev->datalen, &msg) < 0) {
+        k->bad_messages++;
+        return;
+    }
+    if (msg.action == LOADID_CMD_ZERO) {
         loadid_kin_state_t st;
         if (loadid_signals_kinematics_at(k->sig, ev->t_us, &st) == 0) {
             memcpy(k->g_init, st.gravity, sizeof k->g_init);
             k->have_zero = 1;
             k->zero_us = ev->t_us;
         }
-    } else if (msg.action == LOADID_COMMAND_T_START && k->start_us == INT64_MIN) {
+    } else if (msg.action == LOADID_CMD_START && k->start_us == INT64_MIN) {
         k->start_us = ev->t_us;
         k->end_us = ev->t_us + (int64_t)llround(k->cfg->duration_s * 1e6);
-        snprintf(k->load_name, sizeof k->load_name, "%s", msg.load_name ? msg.load_name : "");
+        snprintf(k->load_name, sizeof k->load_name, "%s", msg.load_name);
     }
-    loadid_command_t_decode_cleanup(&msg);
 }
 
 static void on_sample(kappa_run_t *k, const loadid_jr3_sample_t *smp) {
@@ -159,7 +166,17 @@ static int run(const loadid_config_t *cfg, const loadid_chain_t *chain, const ch
                     on_sample(k, &out.sample);
             }
         }
-        if (rc < 0) fprintf(stderr, "%s: %s/can.log: read error\n", prog, dir);
+        if (rc < 0 && *loadid_recording_lcm_error(rec))
+            fprintf(stderr, "%s: %s/lcm.log: %s\n", prog, dir, loadid_recording_lcm_error(rec));
+        else if (rc < 0)
+            fprintf(stderr, "%s: %s/can.log: read error\n", prog, dir);
+        loadid_eventlog_stats_t ls;
+        loadid_recording_lcm_stats(rec, &ls);
+        if (ls.damaged || ls.truncated)
+            fprintf(stderr, "%s: warning: %s/lcm.log: %s\n", prog, dir, ls.first_problem);
+        if (k->bad_messages)
+            fprintf(stderr, "%s: warning: %s/lcm.log: %lld messages could not be decoded\n", prog,
+                    dir, (long long)k->bad_messages);
     }
     for (int i = 0; i < KAPPAS; ++i) {
         loadid_real_t phi[16];

@@ -19,8 +19,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "lcmtypes/loadid_command_t.h"
-#include "lcmtypes/loadid_joint_state_t.h"
+#include "loadid/lcm_wire.h"
 #include "loadid/recording.h"
 #include "loadid/socketcan.h"
 
@@ -57,23 +56,30 @@ static int is_channel(const char *channel, const char *name) {
 }
 
 /* Re-publishes an LCM event with its utime moved to now's time base, on
- * the channel it was recorded on. */
-static void republish(lcm_t *lcm, const loadid_rec_event_t *ev, int64_t shift) {
+ * the channel it was recorded on; joint states and commands go through the
+ * service's decoder (lcm_wire.h), and one it refuses is not sent. Returns
+ * 1 when it was refused. */
+static int republish(lcm_t *lcm, const loadid_rec_event_t *ev, int64_t shift) {
+    uint8_t buf[LOADID_LCM_JOINT_STATE_MAX > LOADID_LCM_COMMAND_MAX ? LOADID_LCM_JOINT_STATE_MAX
+                                                                    : LOADID_LCM_COMMAND_MAX];
+    const size_t len = (size_t)ev->datalen;
+    int n;
     if (is_channel(ev->channel, "LOADID_JOINTS")) {
-        loadid_joint_state_t m;
-        if (loadid_joint_state_t_decode(ev->data, 0, ev->datalen, &m) < 0) return;
+        loadid_lcm_joint_state_t m;
+        if (loadid_lcm_decode_joint_state(ev->data, len, &m) < 0) return 1;
         m.utime += shift;
-        loadid_joint_state_t_publish(lcm, ev->channel, &m);
-        loadid_joint_state_t_decode_cleanup(&m);
+        n = loadid_lcm_encode_joint_state(&m, buf, sizeof buf);
     } else if (is_channel(ev->channel, "LOADID_COMMAND")) {
-        loadid_command_t m;
-        if (loadid_command_t_decode(ev->data, 0, ev->datalen, &m) < 0) return;
+        loadid_lcm_command_t m;
+        if (loadid_lcm_decode_command(ev->data, len, &m) < 0) return 1;
         m.utime += shift;
-        loadid_command_t_publish(lcm, ev->channel, &m);
-        loadid_command_t_decode_cleanup(&m);
+        n = loadid_lcm_encode_command(&m, buf, sizeof buf);
     } else {
         lcm_publish(lcm, ev->channel, ev->data, (unsigned)ev->datalen); /* as recorded */
+        return 0;
     }
+    if (n > 0) lcm_publish(lcm, ev->channel, buf, (unsigned)n);
+    return n <= 0;
 }
 
 static int play(const char *dir, int can_fd, lcm_t *lcm, double speed, int64_t *sent) {
@@ -85,7 +91,7 @@ static int play(const char *dir, int can_fd, lcm_t *lcm, double speed, int64_t *
     }
     loadid_rec_event_t ev;
     int rc, have_t0 = 0;
-    int64_t t0 = 0, start = 0;
+    int64_t t0 = 0, start = 0, bad = 0;
     while ((rc = loadid_recording_reader_next(rec, &ev)) == 1) {
         if (ev.kind == LOADID_REC_BAD_LINE) continue;
         if (!have_t0) t0 = ev.t_us, start = wall_us() + 100000, have_t0 = 1;
@@ -107,10 +113,22 @@ static int play(const char *dir, int can_fd, lcm_t *lcm, double speed, int64_t *
              * state's utime is when the joints were sampled, and the
              * filters differentiate by it (send-time jitter there cost the
              * VM test 67 % of the mass). */
-            republish(lcm, &ev, due - ev.t_us);
+            bad += republish(lcm, &ev, due - ev.t_us);
         }
         (*sent)++;
     }
+    /* What could not be read or decoded, said once a pass. */
+    loadid_eventlog_stats_t ls;
+    loadid_recording_lcm_stats(rec, &ls);
+    if (rc < 0 && *loadid_recording_lcm_error(rec))
+        fprintf(stderr, "%s: %s/lcm.log: %s\n", prog, dir, loadid_recording_lcm_error(rec));
+    else if (rc < 0)
+        fprintf(stderr, "%s: %s/can.log: read error\n", prog, dir);
+    if (ls.damaged || ls.truncated)
+        fprintf(stderr, "%s: warning: %s/lcm.log: %s\n", prog, dir, ls.first_problem);
+    if (bad)
+        fprintf(stderr, "%s: warning: %s/lcm.log: %lld messages could not be decoded, not sent\n",
+                prog, dir, (long long)bad);
     loadid_recording_reader_close(rec);
     return rc < 0 ? 1 : 0;
 }

@@ -71,9 +71,11 @@ typedef struct {
      * the period, which the loop tracks (gain stamp_gain^2 / 4). Encoders
      * read to 2^-20 of a turn at 2 rad/s move 1e-4 rad in 50 us of
      * jitter: treated as exact, that made the filters' q'' useless (RLS
-     * found 2 % of the mass with 200 us of jitter). A stamp more than half a period off the
-     * prediction resynchronises the loop (a skipped or bunched message, a
-     * stream at another rate). stamp_gain in (0, 1]; 1 keeps the stamps
+     * found 2 % of the mass with 200 us of jitter). A stamp a whole number
+     * k >= 2 of periods on (within a quarter period) follows k - 1 lost
+     * messages and keeps the period; any other stamp more than half a
+     * period off the prediction resynchronises the loop (a bunched
+     * message, a stream at another rate). stamp_gain in (0, 1]; 1 keeps the stamps
      * as they are. Default 0.005: jitter divided by about 20 (sqrt(g/2)),
      * locked within about 1 / g = 200 joint states; with 200 us of
      * jitter the on-line estimates equal those without, where 0.02 still

@@ -104,7 +104,14 @@ typedef struct {
     double max_missing_share;           /* estimation.max_missing_share: (loadid) a
                                            run whose window lost more than this
                                            share of its samples for want of joint
-                                           data is incomplete; [0, 1], default 0.02 */
+                                           data, or of its time for want of F/T
+                                           samples, is incomplete; [0, 1],
+                                           default 0.02 */
+    double max_refused_share;           /* estimation.max_refused_share: (loadid) a
+                                           run whose window's F/T samples were
+                                           refused (saturated, faulty, incomplete)
+                                           more often than this share is
+                                           incomplete; [0, 1], default 0.1 */
 
     /* zeroing: */
     double zeroing_window_s;            /* default 0.2 */

@@ -101,9 +101,13 @@ typedef struct {
     int64_t estimator_errors;     /* updates refused (non-finite input, full) */
     /* The last estimation run, once it ended: */
     int complete;                 /* 1: ZERO (when zeroing) and START seen, the
-                                     window ran to its end (or STOP), joint
-                                     data for nearly all of it */
-    char incomplete_reason[192];  /* why not, else "" */
+                                     window ran to its end (or STOP), F/T
+                                     samples and joint data for nearly all
+                                     of it (estimation.max_missing_share),
+                                     few F/T samples refused
+                                     (estimation.max_refused_share); 0 also
+                                     after FAILED */
+    char incomplete_reason[256];  /* why not, else "" */
     loadid_noise_levels_t noise;  /* the on-line estimators' noise levels */
     double rescale[3];            /* what RTLS and TLS_BATCH multiplied the force
                                      rows', torque rows' noise and the columns'
