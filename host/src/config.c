@@ -376,7 +376,7 @@ static int read_can_jr3_lcm(loadid_yaml_node_t *root, loadid_config_t *c) {
         if (!name[0] || strlen(name) > CAN_IFNAME_MAX)
             return loadid_yaml_fail(n, "a network interface name has 1 to %d characters, got '%s'",
                                     CAN_IFNAME_MAX, name);
-        memcpy(c->can_interface, name, sizeof name);
+        snprintf(c->can_interface, sizeof c->can_interface, "%s", name); /* no bytes past the NUL */
     }
     if ((n = loadid_yaml_get(s, "base_id"))) {
         uint64_t id;
@@ -404,7 +404,7 @@ static int read_can_jr3_lcm(loadid_yaml_node_t *root, loadid_config_t *c) {
         if (!sep || sep == url)
             return loadid_yaml_fail(n, "expected an LCM URL such as "
                                        "udpm://239.255.76.67:7667?ttl=0, got '%s'", url);
-        memcpy(c->lcm_url, url, sizeof url);
+        snprintf(c->lcm_url, sizeof c->lcm_url, "%s", url);
     }
     if ((n = loadid_yaml_get(s, "channel_prefix")) && !loadid_yaml_is_null(n)) {
         char prefix[sizeof c->lcm_channel_prefix];
@@ -413,7 +413,7 @@ static int read_can_jr3_lcm(loadid_yaml_node_t *root, loadid_config_t *c) {
             if (!isalnum((unsigned char)*ch) && !strchr("_-./", *ch))
                 return loadid_yaml_fail(n, "a channel name prefix of letters, digits, '_', '-', "
                                            "'.' and '/' only, got '%s'", prefix);
-        memcpy(c->lcm_channel_prefix, prefix, sizeof prefix);
+        snprintf(c->lcm_channel_prefix, sizeof c->lcm_channel_prefix, "%s", prefix);
     }
     if (loadid_yaml_get(s, "command_sources")) {
         TRY(loadid_yaml_get_sequence(s, "command_sources", &n));
@@ -597,7 +597,7 @@ static int read_sensor_modbus(loadid_yaml_node_t *root, loadid_config_t *c) {
         char dev[sizeof c->modbus_device];
         TRY(loadid_yaml_as_string(n, dev, sizeof dev));
         if (!dev[0]) return loadid_yaml_fail(n, "must not be empty");
-        memcpy(c->modbus_device, dev, sizeof dev);
+        snprintf(c->modbus_device, sizeof c->modbus_device, "%s", dev);
     }
     if ((n = loadid_yaml_get(s, "baud"))) {
         int baud;
