@@ -10,7 +10,10 @@ times, and prints as JSON what came back on LOADID_ESTIMATE, LOADID_STATUS
 and LOADID_WRENCH; then asks the CLI for the status, resets the daemon
 through the CLI, asks again, and stops the daemon with SIGTERM.
 LOADID_DAEMON_PRELOAD in the environment is the daemon's LD_PRELOAD (only
-the daemon's).
+the daemon's). LOADID_SESSION_FLOOD_HZ in the environment: a second LCM
+handle publishes that many messages a second on foreign channels (other
+robots' joint states and a camera's, 100-400 bytes) from the daemon's start
+to its stop; the count sent is in the JSON ("flood_sent").
 """
 
 from __future__ import annotations
@@ -21,7 +24,10 @@ import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
+
+import lcm
 
 from lcm_loopback import open_session
 
@@ -47,6 +53,28 @@ def main():
     daemon = subprocess.Popen([loadidd, "--config", config, "--can-file", f"{rec}/can.log",
                                "--can-file-epoch", str(epoch), "--publish-every", "100"],
                               stderr=subprocess.PIPE, text=True, env=env)
+    flood = {"sent": 0, "stop": threading.Event()}
+
+    def flood_lcm(hz):
+        # Bursts every millisecond, paced against the clock.
+        fl = lcm.LCM("udpm://239.255.76.67:7667?ttl=0")
+        payloads = [(b"R2_LOADID_JOINTS", bytes(100)), (b"LOADID_JOINTS_X", bytes(180)),
+                    (b"CAMERA_FRAME_META", bytes(400))]
+        t0, k = time.time(), 0
+        while not flood["stop"].is_set():
+            due = int((time.time() - t0) * hz)
+            while k < due:
+                ch, data = payloads[k % len(payloads)]
+                fl.publish(ch.decode(), data)
+                k += 1
+            time.sleep(0.001)
+        flood["sent"] = k
+
+    flooder = None
+    if os.environ.get("LOADID_SESSION_FLOOD_HZ"):
+        flooder = threading.Thread(target=flood_lcm,
+                                   args=(float(os.environ["LOADID_SESSION_FLOOD_HZ"]),))
+        flooder.start()
     sched = None  # /proc/PID/stat: fields 40 (rt_priority) and 41 (policy)
     shift = epoch - first_can
 
@@ -104,6 +132,9 @@ def main():
         drain_notify()
         time.sleep(0.02)
     err = daemon.communicate(timeout=10)[1]
+    if flooder:
+        flood["stop"].set()
+        flooder.join()
     pump(time.time() + 0.3)
     drain_notify()
 
@@ -114,6 +145,7 @@ def main():
     print(json.dumps({
         "returncode": daemon.returncode, "stderr": err, "cli": cli_log, "notify": notes,
         "sched": sched, "memory_kb": memory, "reencoded_differ": out.reencoded_differ,
+        "flood_sent": flood["sent"],
         "estimate": [est(m) for m in got["estimate"]],
         "status": [{"state": m.state, "samples_ok": m.samples_ok, "frames_bad": m.frames_bad,
                     "samples_incomplete": m.samples_incomplete,
