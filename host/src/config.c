@@ -546,10 +546,15 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
         return loadid_yaml_fail(loadid_yaml_get(s, "stamp_gain"), "must be <= 1, got %g",
                                 c->kalman_stamp_gain);
     TRY(read_number(s, "joint_period_s", &c->kalman_joint_period_s, POSITIVE));
-    if (c->kalman_lag_s > c->kalman_joint_period_s * LOADID_JF_MAX_LAG + 1e-12)
-        return loadid_yaml_fail(loadid_yaml_get(s, "lag_s"),
-                                "at most %d joint periods (%g s), got %g", LOADID_JF_MAX_LAG,
+    if (c->kalman_lag_s > c->kalman_joint_period_s * LOADID_JF_MAX_LAG + 1e-12) {
+        /* Only joint_period_s may be given (the lag its default): blame the
+         * key that is there. */
+        loadid_yaml_node_t *lag = loadid_yaml_get(s, "lag_s");
+        return loadid_yaml_fail(lag ? lag : loadid_yaml_get(s, "joint_period_s"),
+                                "kalman.lag_s%s must be at most %d joint periods (%g s), got %g",
+                                lag ? "" : " (its default)", LOADID_JF_MAX_LAG,
                                 c->kalman_joint_period_s * LOADID_JF_MAX_LAG, c->kalman_lag_s);
+    }
     TRY(read_level(s, "spec_sigma", &c->kalman_spec_sigma, LOADID_NOISE_GIVEN_KF_SPEC, c));
     TRY(read_level(s, "alpha_sigma", &c->kalman_alpha_sigma, LOADID_NOISE_GIVEN_KF_ALPHA, c));
 

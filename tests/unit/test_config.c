@@ -820,6 +820,13 @@ static void unknown_keys_in_loadid_sections_are_errors(void **state) {
     expect_error("estimaton:\n  methods: [RLS]\n",
                  "1: estimaton: unknown section (did you mean 'estimation'?)");
     expect_error("kalmann:\n  lag_s: 0\n", "1: kalmann: unknown section (did you mean 'kalman'?)");
+    /* The lag's default over a short joint period given alone: the error
+     * names the key that is there (a NULL node crashed, found by fuzz_config). */
+    expect_error("kalman:\n  joint_period_s: 0.0001\n",
+                 "2: kalman.joint_period_s: kalman.lag_s (its default) must be at most 200 joint "
+                 "periods (0.02 s), got 0.05");
+    expect_error("kalman:\n  joint_period_s: 0.0001\n  lag_s: 0.03\n",
+                 "3: kalman.lag_s: kalman.lag_s must be at most 200 joint periods");
 }
 
 /* Any other top-level name is another program's section in a shared
