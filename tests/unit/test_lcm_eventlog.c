@@ -608,24 +608,8 @@ static void test_unseekable_input_is_refused(void **state) {
 }
 
 #ifndef LOADID_SANITIZED
-/* ---- no allocation per event (malloc interposed; not under ASan) ---- */
-extern void *__libc_malloc(size_t);
-extern void *__libc_calloc(size_t, size_t);
-extern void *__libc_realloc(void *, size_t);
-static volatile long allocations;
-static volatile int counting;
-void *malloc(size_t n) {
-    if (counting) ++allocations;
-    return __libc_malloc(n);
-}
-void *calloc(size_t n, size_t s) {
-    if (counting) ++allocations;
-    return __libc_calloc(n, s);
-}
-void *realloc(void *p, size_t n) {
-    if (counting) ++allocations;
-    return __libc_realloc(p, n);
-}
+/* ---- no allocation per event (alloc_counter.c; not under ASan) ---- */
+#include "alloc_counter.h"
 
 static void test_reading_allocates_nothing(void **state) {
     (void)state;
@@ -635,14 +619,14 @@ static void test_reading_allocates_nothing(void **state) {
     l.bytes[l.off[20]] = 0;
     reader_t rd;
     open_bytes(&rd, l.bytes, l.len - 3, 0);
-    allocations = 0;
-    counting = 1;
+    alloc_count = 0;
+    alloc_counting = 1;
     loadid_eventlog_event_t ev;
     int n = 0;
     while (loadid_eventlog_next(rd.r, &ev) == 1) ++n;
-    counting = 0;
+    alloc_counting = 0;
     assert_int_equal(n, 37);
-    assert_int_equal(allocations, 0);
+    assert_int_equal(alloc_count, 0);
     loadid_eventlog_stats_t st = stats(&rd);
     assert_int_equal(st.damaged, 2);
     assert_int_equal(st.truncated, 1);
