@@ -873,9 +873,11 @@ def method_row(r: dict, truth) -> dict:
         for i in range(10):
             s = std[i] if i < len(std) else None
             if s is None or not math.isfinite(s):
-                row[f"cov{i}"] = ""               # not determined
+                row[f"cov{i}"] = row[f"z{i}"] = ""   # not determined
             else:
                 row[f"cov{i}"] = int(abs(phi[i] - truth[i]) <= 2 * s)
+                # signed error in units of phi_std: RMS 1 when calibrated
+                row[f"z{i}"] = float((phi[i] - truth[i]) / s) if s > 0 else ""
     ident = r.get("identified") or []
     row["identified"] = "+".join(ident)
     row["inertia_identified"] = int("inertia" in ident)
@@ -1004,7 +1006,7 @@ CSV_FIELDS = (["robot", "load", "noise", "seed", "method", "ok", "error", "compl
                "mass_pct", "com_mm", "inertia_pct", "model_mass_pct", "model_com_mm",
                "model_inertia_pct", "identified", "inertia_identified", "projected", "noise_scale",
                "report_consistent", "usable_s"] + [f"cov{i}" for i in range(10)]
-              + [f"phi{i}" for i in range(10)]
+              + [f"z{i}" for i in range(10)] + [f"phi{i}" for i in range(10)]
               + ["noise_ratio", "sigma_f", "sigma_tau", "sigma_spec", "sigma_alpha", "saturated",
                  "seconds", "sim_seconds"])
 
