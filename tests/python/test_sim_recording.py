@@ -46,7 +46,7 @@ CANDUMP = re.compile(r"^\((\d+)\.(\d{6})\) (\S+) ([0-9A-F]{3})#([0-9A-F]*)$")
 def read_values(rec):
     with open(rec / "values.csv") as f:
         rows = list(csv.reader(f))[1:]
-    return {int(r[0]): (int(r[1]), np.array([float(x) for x in r[2:]])) for r in rows}
+    return {int(r[0]): (int(r[1]), np.array([float(x) for x in r[2:14]])) for r in rows}
 
 
 def decode_project(rec):

@@ -74,7 +74,8 @@ static void usage(FILE *out) {
             "(can.log, lcm.log and truth.yaml are overwritten, other files stay).\n"
             "--load-phi overrides simulation.load_phi (eq. 5, inertia about the origin of S).\n"
             "--values writes what each CAN sample encodes, in SI (t_us, sequence, f, tau,\n"
-            "a - g, alpha), before rounding to counts.\n",
+            "a - g, alpha), before rounding to counts, and the damage done to it (bits:\n"
+            "1 skipped, 2 a frame dropped, 4 a bit flipped, 8 saturated, 16 fault).\n",
             prog);
 }
 

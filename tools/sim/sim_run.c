@@ -27,6 +27,16 @@ static const double kTwoPi = 6.28318530717958647692;
 #define FRAME_GAP_US 115    /* between the frames of one sample (1 Mbit/s) */
 #define PRISMATIC_STEP 1e-6 /* encoder resolution of a prismatic joint [m] */
 
+/* The --values file's last column: what was done to a CAN sample, so tests
+ * can count usable samples from the simulator's own record. */
+enum {
+    SAMPLE_SKIPPED = 1,       /* no frame sent (a sequence gap) */
+    SAMPLE_FRAME_DROPPED = 2, /* one or more of its frames not sent (incomplete) */
+    SAMPLE_BIT_FLIPPED = 4,   /* a data bit of one of its frames flipped */
+    SAMPLE_SATURATED = 8,     /* a count clamped at full scale (saturation bit) */
+    SAMPLE_FAULT = 16,        /* the sensor-fault bit set */
+};
+
 typedef struct {
     loadid_config_t cfg;
     loadid_chain_t chain;
@@ -39,6 +49,7 @@ typedef struct {
     loadid_damage_t damage;
     loadid_recording_writer_t *rec;
     FILE *values;                 /* --values: what each sample encodes, in SI */
+    unsigned sample_damage;       /* SAMPLE_* of the CAN sample being written */
     double vib_phase[2][3];
     loadid_rng_t jitter_rng;      /* simulation.jitter_us: a stream of its own */
     int64_t last_joint_us;        /* stamp of the last joint state written */
@@ -109,6 +120,7 @@ static int write_can(sim_t *s, loadid_can_frame_t *f) {
     if (loadid_damage_now(&s->damage, LOADID_DAMAGE_BIT_ERRORS)) {
         unsigned bit = loadid_damage_pick(&s->damage, 64);
         f->data[bit / 8] ^= (uint8_t)(1u << (bit % 8));
+        s->sample_damage |= SAMPLE_BIT_FLIPPED;
     }
     s->last_can_us = f->t_us;
     return loadid_recording_can(s->rec, f);
@@ -129,20 +141,28 @@ static int can_sample(sim_t *s, int64_t k, int64_t t, double sim_t_s) {
     loadid_can_frame_t frames[4];
     int sat = loadid_jr3_encode(&s->jr3, (const double(*)[3])value, (uint8_t)(k & 0xFF), fault, t, frames);
     if (sat < 0) return sat;
+    s->samples++;
+    if (sat) s->saturated_samples++;
+    s->sample_damage = (sat ? SAMPLE_SATURATED : 0) | (fault ? SAMPLE_FAULT : 0);
+    if (loadid_damage_now(&s->damage, LOADID_DAMAGE_SKIP_SAMPLES)) {
+        s->sample_damage |= SAMPLE_SKIPPED;
+    } else {
+        for (int g = 0; g < 4; ++g) {
+            frames[g].t_us = t + g * FRAME_GAP_US;
+            if (loadid_damage_now(&s->damage, LOADID_DAMAGE_DROP_FRAMES)) {
+                s->sample_damage |= SAMPLE_FRAME_DROPPED;
+                continue;
+            }
+            if ((rc = write_can(s, &frames[g])) != 0) return rc;
+        }
+    }
     if (s->values) {
         fprintf(s->values, "%lld,%u", (long long)t, (unsigned)(k & 0xFF));
         for (int g = 0; g < 4; ++g)
             for (int i = 0; i < 3; ++i) fprintf(s->values, ",%.17g", value[g][i]);
-        fputc('\n', s->values);
+        fprintf(s->values, ",%u\n", s->sample_damage);
     }
-    s->samples++;
-    if (sat) s->saturated_samples++;
-    if (loadid_damage_now(&s->damage, LOADID_DAMAGE_SKIP_SAMPLES)) return 0;
-    for (int g = 0; g < 4; ++g) {
-        frames[g].t_us = t + g * FRAME_GAP_US;
-        if (loadid_damage_now(&s->damage, LOADID_DAMAGE_DROP_FRAMES)) continue;
-        if ((rc = write_can(s, &frames[g])) != 0) return rc;
-    }
+    if (s->sample_damage & SAMPLE_SKIPPED) return 0;
     if (loadid_damage_now(&s->damage, LOADID_DAMAGE_BAD_FRAMES)) {
         loadid_can_frame_t bad = frames[0];
         bad.t_us = t + 4 * FRAME_GAP_US;
@@ -341,7 +361,7 @@ int loadid_sim_run(const loadid_sim_options_t *o, loadid_sim_summary_t *sum, cha
             loadid_recording_close(s->rec);
             return fail(s, err, errlen, rc, "cannot write the --values file");
         }
-        fprintf(s->values, "t_us,sequence,fx,fy,fz,tx,ty,tz,ax,ay,az,alx,aly,alz\n");
+        fprintf(s->values, "t_us,sequence,fx,fy,fz,tx,ty,tz,ax,ay,az,alx,aly,alz,damage\n");
     }
     const int64_t t0 = o->start_utime;
     const int64_t zero_us = t0 + (int64_t)llround(ZERO_AT_S * 1e6);
