@@ -1,0 +1,51 @@
+"""How far an estimate is from the truth, in the figures the end-to-end
+tests bound (and tests/tools/error_survey.py measures over many seeds):
+mass in %, COM in mm, and each principal moment of the inertia about the
+COM in % of the true one. Computed here with numpy (parallel-axis
+theorem, eigenvalues), not by loadid."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def physical(phi):
+    """Mass, COM and the 3x3 inertia about the COM of phi (eq. 5 order:
+    m, m c, Ixx, Ixy, Ixz, Iyy, Iyz, Izz about the sensor frame's origin)."""
+    phi = np.asarray(phi, float)
+    m, c = phi[0], phi[1:4] / phi[0]
+    i = phi[4:]
+    I = np.array([[i[0], i[1], i[2]], [i[1], i[3], i[4]], [i[2], i[4], i[5]]])
+    return m, c, I - m * (c @ c * np.eye(3) - np.outer(c, c))
+
+
+def load_errors(phi, truth) -> dict:
+    """mass_pct, com_mm, moments_pct (3, ascending principal moments) and
+    moment_pct (their worst); NaN where phi is not finite."""
+    phi = np.asarray(phi, float)
+    if not np.all(np.isfinite(phi)) or not phi[0] > 0:
+        return dict(mass_pct=math.nan, com_mm=math.nan, moments_pct=[math.nan] * 3,
+                    moment_pct=math.nan)
+    m, c, ic = physical(phi)
+    mt, ct, ict = physical(truth)
+    lam, lam_t = np.linalg.eigvalsh(ic), np.linalg.eigvalsh(ict)
+    mom = np.abs(lam - lam_t) / lam_t * 100
+    return dict(mass_pct=abs(m - mt) / mt * 100, com_mm=float(np.linalg.norm(c - ct) * 1e3),
+                moments_pct=mom.tolist(), moment_pct=float(mom.max()))
+
+
+def assert_accuracy(est: dict, truth, mass_pct: float, com_mm: float, moment_pct: float):
+    """The estimate (a result JSON entry, or a phi) is finite and within
+    the bounds; the message says the figures."""
+    phi = est["phi"] if isinstance(est, dict) else est
+    assert phi is not None and all(x is not None for x in phi), est
+    e = load_errors(phi, truth)
+    what = (f"mass {e['mass_pct']:.3f} % (bound {mass_pct}), COM {e['com_mm']:.3f} mm "
+            f"(bound {com_mm}), principal moments {np.round(e['moments_pct'], 2)} % "
+            f"(bound {moment_pct})")
+    assert all(math.isfinite(x) for x in (e["mass_pct"], e["com_mm"], e["moment_pct"])), what
+    assert e["mass_pct"] <= mass_pct and e["com_mm"] <= com_mm and \
+        e["moment_pct"] <= moment_pct, what
+    return e
