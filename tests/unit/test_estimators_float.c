@@ -25,6 +25,10 @@ static void test_exact_data_float(void **state) {
     (void)state;
     const loadid_method_t m[5] = {LOADID_METHOD_RLS, LOADID_METHOD_RIV, LOADID_METHOD_RTLS,
                                   LOADID_METHOD_LS_BATCH, LOADID_METHOD_TLS_BATCH};
+    /* Seen (-O2): RLS 4.6e-6, RIV 7.4e-6, RTLS 5.8e-4 (its SVD update
+     * rounds at every sample), LS_BATCH and TLS_BATCH 1.2e-5; bounds about
+     * 3x, with room for -O0 (the sanitizer build) rounding differently. */
+    const double bound[5] = {2e-5, 3e-5, 2e-3, 5e-5, 5e-5};
     dataset_spec_t spec = {.seed = 11, .n_samples = 1500, .n_params = 10};
     dataset_t d;
     assert_int_equal(dataset_make(&spec, &d), 0);
@@ -38,8 +42,9 @@ static void test_exact_data_float(void **state) {
         loadid_real_t phi[10];
         assert_int_equal(dataset_estimate(&d, &cfg, phi, NULL), 0);
         const double err = max_rel_diff(phi, d.truth, 10, 0.0);
-        print_message("float exact %-9s max rel err %.2e\n", loadid_method_name(m[i]), err);
-        assert_true(err < 2e-3);
+        print_message("float exact %-9s max rel err %.2e (bound %.0e)\n", loadid_method_name(m[i]),
+                      err, bound[i]);
+        assert_true(err < bound[i]);
     }
     dataset_free(&d);
 }
@@ -82,7 +87,7 @@ static void test_rtls_tracks_batch_float(void **state) {
     print_message("float RTLS vs batch TLS over %d samples: %d published estimates compared, worst rel diff %.2e\n",
                   d.n_samples, compared, worst);
     assert_true(compared >= 10);
-    assert_true(worst < 2e-3);
+    assert_true(worst < 2e-4); /* seen 5.1e-5 */
     /* And both estimate the load: mass within 2 %. */
     loadid_real_t a[10];
     assert_int_equal(loadid_est_estimate(rtls, a, NULL), 0);
@@ -115,7 +120,7 @@ static void test_recursive_methods_noisy_float(void **state) {
     const double rls_vs_ls = max_rel_diff(phi[1], ls, 10, 1e-4);
     print_message("float, noisy: RLS vs LS_BATCH %.2e; masses RLS %.4f RIV %.4f RTLS %.4f\n", rls_vs_ls,
                   (double)phi[1][0], (double)phi[2][0], (double)phi[3][0]);
-    assert_true(rls_vs_ls < 1e-3);
+    assert_true(rls_vs_ls < 5e-5); /* seen 1.2e-5 */
     /* RIV (noise-free instruments) and RTLS are consistent: mass within 1 %. */
     assert_true(fabs(phi[2][0] - 1.0) < 0.01);
     assert_true(fabs(phi[3][0] - 1.0) < 0.01);

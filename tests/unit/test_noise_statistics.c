@@ -58,9 +58,12 @@ static void test_rtls_beats_rls_on_inertia_over_seeds(void **state) {
     print_message("%d seeds: mean inertia error RLS %.1f %%, RTLS %.1f %%; RTLS better in %d\n", kSeeds,
                   sum_rls / kSeeds, sum_rtls / kSeeds, rtls_wins);
     /* Thresholds: RTLS wins in at least 90 % of the seeds and halves the
-     * mean error. Fixed seeds make the outcome deterministic. */
+     * mean error; and its own mean error stays within 2.3x of the 4.4 % it
+     * shows (RLS 28 %), so that RTLS getting worse fails even while RLS is
+     * worse still. Fixed seeds make the outcome deterministic. */
     assert_true(rtls_wins >= (9 * kSeeds) / 10);
     assert_true(sum_rtls < 0.5 * sum_rls);
+    assert_true(sum_rtls / kSeeds < 10.0);
 }
 
 int main(void) {
