@@ -3,9 +3,11 @@
  * both parameter counts, including RTLS's initial SVD and its rank-growing
  * branch; joint states into the Kalman filters, the signal sources with
  * forward kinematics, and their refusals; the offline smoother on a
- * caller's work space) performs no heap allocation and no system call:
+ * caller's work space) performs no heap allocation, takes no lock and makes
+ * no system call:
  *  - malloc, calloc, realloc, free and the aligned allocators are
- *    interposed and counted (C++ operator new ends in malloc too);
+ *    interposed and counted (C++ operator new ends in malloc too), and so
+ *    are the pthread mutex and rwlock lock calls (no lock either);
  *  - the same loop runs in a child under SECCOMP_MODE_STRICT, where any
  *    system call but read, write, _exit and sigreturn kills the process.
  * Not built with the sanitizers, whose allocator and runtime conflict with
@@ -18,6 +20,7 @@
 #include <stdint.h>
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <linux/seccomp.h>
@@ -207,13 +210,22 @@ static void test_update_and_estimate_do_not_allocate(void **state) {
     alloc_counting = 0;
     free(p);
     assert_int_equal(alloc_count, 1);
-    alloc_count = 0;
+    /* So is a lock. */
+    static pthread_mutex_t mutex = PTHREAD_MUTEX_INITIALIZER;
+    alloc_counting = 1;
+    pthread_mutex_lock(&mutex);
+    alloc_counting = 0;
+    pthread_mutex_unlock(&mutex);
+    assert_int_equal(lock_count, 1);
+    alloc_count = lock_count = 0;
     alloc_counting = 1;
     const int bad = workload_run(&w);
     alloc_counting = 0;
-    print_message("allocations during %d updates+estimates of %d estimators: %ld\n", NSAMPLES, NEST, alloc_count);
+    print_message("allocations during %d updates+estimates of %d estimators: %ld; locks: %ld\n",
+                  NSAMPLES, NEST, alloc_count, lock_count);
     assert_int_equal(bad, 0);
     assert_int_equal(alloc_count, 0);
+    assert_int_equal(lock_count, 0);
     workload_free(&w);
 }
 
