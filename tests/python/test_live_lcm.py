@@ -20,7 +20,8 @@ import sys
 import numpy as np
 import pytest
 
-from recordings import program
+from accuracy import BOUNDS, assert_accuracy
+from recordings import program, read_truth
 
 HERE = pathlib.Path(__file__).resolve().parent
 
@@ -87,7 +88,7 @@ def test_cli_status_and_reset(session):
     assert after["rc"] == 0 and "state IDLE" in after["out"], after
 
 
-def test_estimates_come_while_estimating_and_at_done(session):
+def test_estimates_come_while_estimating_and_at_done(session, recording):
     est = session["estimate"]
     methods = {e["method"] for e in est}
     assert methods == {3, 2, 1, 6}  # RTLS, RIV, RLS, REFINED (estimation.methods)
@@ -97,8 +98,11 @@ def test_estimates_come_while_estimating_and_at_done(session):
     assert 6 not in {e["method"] for e in running}  # REFINED: once, at DONE
     assert len(final) == 4 and all(e["samples"] == 1500 for e in final)
     assert all(e["load_name"] == "o1" for e in final)
-    rtls = next(e for e in final if e["method"] == 3)
-    assert abs(rtls["mass"] - 1.0) < 0.03
+    # Each final estimate finds o1: live is offline to 1e-9 (below), so the
+    # offline tests' bounds (2.5x the worst of 20 seeds) hold.
+    phi = np.array(json.loads(read_truth(recording)["load.phi"]))
+    for e in final:
+        assert_accuracy(e, phi, **BOUNDS["default"])
 
 
 def test_final_estimates_equal_offline(session, recording, tmp_path):
@@ -112,8 +116,12 @@ def test_final_estimates_equal_offline(session, recording, tmp_path):
     assert r.returncode == 0, r.stderr
     offline = {o["method"]: o for o in json.loads(r.stdout)}
     names = {1: "RLS", 2: "RIV", 3: "RTLS", 6: "REFINED"}
-    for e in (e for e in session["estimate"] if e["state"] == 3):
+    finals = [e for e in session["estimate"] if e["state"] == 3]
+    # One final estimate of every configured method, each a real one.
+    assert sorted(e["method"] for e in finals) == [1, 2, 3, 6], finals
+    for e in finals:
         o = offline[names[e["method"]]]
+        assert e["samples"] == 1500 and np.all(np.isfinite(e["phi"]))
         assert e["samples"] == o["samples"]
         np.testing.assert_allclose(e["phi"], o["phi"], rtol=1e-9, atol=1e-12)
 
@@ -149,11 +157,18 @@ def test_status_counts_and_loop_times(session):
     assert any(s["max"] > 0 for s in st) and all(s["p50"] <= s["p99"] <= s["max"] + 0.5 for s in st)
 
 
+# The compensated wrench's median per axis: seen 0.075 N and 0.0037 N m in
+# both sessions (the sensor's noise, 0.1 N and 0.005 N m, has a median
+# |x| of 0.067 and 0.0034); bounds at about 2.5x. The load alone is 9.8 N.
+COMP_F, COMP_TAU = 0.2, 0.01
+
+
 def test_compensated_wrench_flows_once_done(session):
     w = np.array(session["wrench"])
     assert len(w) > 500  # the 0.8 s of rest and fade-out after DONE
     # What is left is noise (0.1 N, 0.005 N m) and model error, not the load.
-    assert np.median(np.abs(w[:, :3])) < 0.5 and np.median(np.abs(w[:, 3:])) < 0.05
+    assert np.all(np.isfinite(w))
+    assert np.median(np.abs(w[:, :3])) < COMP_F and np.median(np.abs(w[:, 3:])) < COMP_TAU
 
 
 def test_saved_estimate_restarts_wrench_compensation(session, recording, tmp_path):
@@ -175,6 +190,16 @@ def test_saved_estimate_restarts_wrench_compensation(session, recording, tmp_pat
     assert "loaded" in again["stderr"]
     assert len(again["wrench"]) >= 3000  # every sample of the recording
     assert all(s["state"] == 3 for s in again["status"][:2])
+    # The values: the load's own wrench (9.8 N, 0.3 N m of o1 at rest) is
+    # gone, as in the first session after DONE, over the whole recording;
+    # what is left is the sensor's offset (not zeroed: the restored session
+    # has no ZERO), its noise and the model's error.
+    w, w0 = np.array(again["wrench"]), np.array(session["wrench"])
+    print(f"restored: median |f| {np.median(np.abs(w[:, :3]), 0)} N, |tau| "
+          f"{np.median(np.abs(w[:, 3:]), 0)} N m; after DONE in the first session "
+          f"{np.median(np.abs(w0[:, :3]), 0)}, {np.median(np.abs(w0[:, 3:]), 0)}")
+    assert np.all(np.isfinite(w))
+    assert np.median(np.abs(w[:, :3])) < COMP_F and np.median(np.abs(w[:, 3:])) < COMP_TAU
     bad = tmp_path / "bad.yaml"
     bad.write_text(f"lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\nresults:\n  load: {tmp_path / 'none.yaml'}\n")
     r = subprocess.run([program("LOADIDD_EXE"), "--config", str(bad)], capture_output=True,

@@ -18,7 +18,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from accuracy import assert_accuracy
+from accuracy import BOUNDS, assert_accuracy
 from recordings import damage_count, program, read_truth, run_tool, simulate
 
 # The contract's keys in its order, then loadid's own.
@@ -54,31 +54,6 @@ def physical(phi):
     I = np.array([[phi[4], phi[5], phi[6]], [phi[5], phi[7], phi[8]], [phi[6], phi[8], phi[9]]])
     Ic = I - m * (c @ c * np.eye(3) - np.outer(c, c))
     return m, c, Ic[np.triu_indices(3)]
-
-
-# Accuracy bounds of the end-to-end tests: 2.5 times the worst method's
-# maximum over 20 simulator seeds of the same scenario, measured by
-# tests/tools/error_survey.py (mass %, COM mm, worst principal moment of
-# the inertia about the COM %). Rerun it when the method changes.
-BOUNDS = {
-    # max 0.48 %, 0.37 mm, 4.0 % (RTLS, RIV, RLS, TLS_BATCH, REFINED alike)
-    "default": dict(mass_pct=1.2, com_mm=0.95, moment_pct=10.0),
-    # max 0.50 %, 0.39 mm, 3.9 %
-    "distal": dict(mass_pct=1.25, com_mm=1.0, moment_pct=10.0),
-    # max 0.31 %, 0.29 mm, 3.0 %
-    "offset": dict(mass_pct=0.8, com_mm=0.75, moment_pct=7.5),
-    # JR3 accelerometers: its alpha at 5 rad/s^2 of noise; max 4.0 %, 4.2 mm, 44 %
-    "signals-sensor": dict(mass_pct=10.0, com_mm=10.5, moment_pct=110.0),
-    "signals-kf": dict(mass_pct=1.2, com_mm=0.95, moment_pct=10.0),  # as default
-    # max 0.73 %, 0.80 mm, 4.2 %
-    "signals-setpoint": dict(mass_pct=1.8, com_mm=2.0, moment_pct=10.5),
-    # max 2.4 %, 3.2 mm, 27 %
-    "signals-mixed": dict(mass_pct=6.0, com_mm=8.0, moment_pct=66.0),
-    # saturate, fault, skip-samples 2 %: max 0.49 %, 0.41 mm, 4.2 %
-    "damage": dict(mass_pct=1.25, com_mm=1.05, moment_pct=10.5),
-    # drop-frames 1 %: max 0.43 %, 0.38 mm, 4.9 %
-    "damage-drop-frames": dict(mass_pct=1.1, com_mm=0.95, moment_pct=12.5),
-}
 
 
 def assert_close_to_truth(est, phi, bounds="default"):
