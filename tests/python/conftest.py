@@ -42,6 +42,13 @@ import sys
 import numpy as np
 import pytest
 
+# The sanitizer build preloads its runtimes into pytest (tests/CMakeLists.txt)
+# so ctypes can load the sanitized core; the programs the tests start link
+# them themselves, and get LeakSanitizer back.
+if os.environ.pop("LOADID_PYTEST_PRELOADED", None):
+    os.environ.pop("LD_PRELOAD", None)
+    os.environ.pop("ASAN_OPTIONS", None)
+
 # --------------------------------------------------------------------------
 # Constants of types.h / estimator.h
 # --------------------------------------------------------------------------
