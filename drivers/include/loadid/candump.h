@@ -38,19 +38,19 @@ extern "C" {
                                         20-digit time needs about 70) */
 
 enum loadid_candump_error {
-    LOADID_CANDUMP_E_SYNTAX = -1201,    /* not "(time) ifname frame": missing
+    LOADID_CANDUMP_E_SYNTAX = -1501,    /* not "(time) ifname frame": missing
                                            field, separator, stray text */
-    LOADID_CANDUMP_E_TIMESTAMP = -1202, /* not "(digits.6digits)", or beyond
+    LOADID_CANDUMP_E_TIMESTAMP = -1502, /* not "(digits.6digits)", or beyond
                                            int64 microseconds */
-    LOADID_CANDUMP_E_IFNAME = -1203,    /* empty, longer than 15, or a control
+    LOADID_CANDUMP_E_IFNAME = -1503,    /* empty, longer than 15, or a control
                                            character */
-    LOADID_CANDUMP_E_ID = -1204,        /* not 3 or 8 hex digits, or above
+    LOADID_CANDUMP_E_ID = -1504,        /* not 3 or 8 hex digits, or above
                                            0x7FF / 0x1FFFFFFF (error frames) */
-    LOADID_CANDUMP_E_DATA = -1205,      /* odd or non-hex digits, misplaced
+    LOADID_CANDUMP_E_DATA = -1505,      /* odd or non-hex digits, misplaced
                                            '.', more than 8 bytes */
-    LOADID_CANDUMP_E_FD = -1206,        /* a CAN FD (or XL) frame: "##" */
-    LOADID_CANDUMP_E_REMOTE = -1207,    /* a remote frame: "#R" */
-    LOADID_CANDUMP_E_LONG_LINE = -1208  /* reader: line longer than
+    LOADID_CANDUMP_E_FD = -1506,        /* a CAN FD (or XL) frame: "##" */
+    LOADID_CANDUMP_E_REMOTE = -1507,    /* a remote frame: "#R" */
+    LOADID_CANDUMP_E_LONG_LINE = -1508  /* reader: line longer than
                                            LOADID_CANDUMP_LINE_MAX, or holding
                                            a NUL byte */
 };

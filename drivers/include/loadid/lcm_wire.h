@@ -45,16 +45,16 @@ extern "C" {
 #define LOADID_LCM_STATUS_SIZE (8 + 8 + 1 + 8 * 6 + 8 * 3)
 #define LOADID_LCM_LOAD_MODEL_MAX (8 + 8 + 1 + 4 + LOADID_LCM_NAME_MAX + 1 + 1 + 8 * 30)
 
-/* Return codes (a private range, loadid_lcm_strerror). */
+/* Return codes (-1401.., loadid/error_text.h; loadid_lcm_strerror). */
 enum {
     LOADID_LCM_NONFINITE = 1,       /* decoded; a double is NaN or infinite */
-    LOADID_LCM_ESHORT = -1001,      /* buffer ends inside the message */
-    LOADID_LCM_ELONG = -1002,       /* bytes after the message */
-    LOADID_LCM_EFINGERPRINT = -1003,/* another type (or another version of it) */
-    LOADID_LCM_ECOUNT = -1004,      /* num_joints outside 1..LOADID_LCM_MAX_JOINTS */
-    LOADID_LCM_ESTRING = -1005,     /* string length, NUL terminator or NUL inside */
-    LOADID_LCM_ENOSPC = -1006,      /* encode: the buffer is too small */
-    LOADID_LCM_EINVAL = -1007       /* encode: a field out of range (count, name) */
+    LOADID_LCM_ESHORT = -1401,      /* buffer ends inside the message */
+    LOADID_LCM_ELONG = -1402,       /* bytes after the message */
+    LOADID_LCM_EFINGERPRINT = -1403,/* another type (or another version of it) */
+    LOADID_LCM_ECOUNT = -1404,      /* num_joints outside 1..LOADID_LCM_MAX_JOINTS */
+    LOADID_LCM_ESTRING = -1405,     /* string length, NUL terminator or NUL inside */
+    LOADID_LCM_ENOSPC = -1406,      /* encode: the buffer is too small */
+    LOADID_LCM_EINVAL = -1407       /* encode: a field out of range (count, name) */
 };
 
 typedef enum {
