@@ -1,4 +1,4 @@
-"""The LCM types of DESIGN.md (proto/*.lcm) through lcm-gen's C and Python
+"""The LCM types of docs/INTERFACE.md (proto/*.lcm) through lcm-gen's C and Python
 output.
 
 * C and Python agree byte for byte: tests/tools/lcm_encode_samples (the
@@ -7,10 +7,11 @@ output.
   (LOADID_LCM_PYTHON_DIR) and must encode to the same bytes, fingerprint
   included, and decode the C bytes back to the same fields; the constants
   agree too.
-* The .lcm files say what DESIGN.md says: when DESIGN.md is found (the
-  shared/ folder beside the repository, or LOADID_DESIGN_MD), its LCM block
-  goes through lcm-gen (LOADID_LCM_GEN) here and every type must have the
-  fingerprint, fields and constants of the build's types.
+* The .lcm files say what the interface document says: the LCM block of
+  docs/INTERFACE.md (the one fenced block that starts with
+  "package loadid;") goes through lcm-gen (LOADID_LCM_GEN) here and every
+  type must have the fingerprint, fields and constants of the build's
+  types. The document is part of the repository, so it is never skipped.
 * An event log written and read with the `lcm` package carries a
   joint_state_t, as lcm.log in a recording does.
 """
@@ -193,32 +194,27 @@ def test_event_log_round_trip(lcmtypes, tmp_path):
     assert lcmtypes.command_t.decode(events[3].data).action == 1
 
 
-def _design_md() -> pathlib.Path | None:
-    env = os.environ.get("LOADID_DESIGN_MD")
-    if env:
-        return pathlib.Path(env)
-    p = REPO_ROOT.parent / "shared" / "DESIGN.md"
-    return p if p.is_file() else None
+INTERFACE_MD = REPO_ROOT / "docs" / "INTERFACE.md"
 
 
-def test_lcm_files_match_design(lcmtypes, tmp_path):
-    design = _design_md()
-    if design is None:
-        pytest.skip("DESIGN.md not found (shared/ beside the repository, or LOADID_DESIGN_MD)")
-    text = design.read_text()
-    m = re.search(r"```\s*\n(package loadid;.*?)```", text, flags=re.S)
-    assert m, "DESIGN.md has no LCM block starting with 'package loadid;'"
+def test_lcm_files_match_interface(lcmtypes, tmp_path):
+    assert INTERFACE_MD.is_file(), f"{INTERFACE_MD} is missing"
+    text = INTERFACE_MD.read_text()
+    blocks = re.findall(r"^```[^\n]*\n(package loadid;\n.*?)^```", text, flags=re.S | re.M)
+    assert len(blocks) == 1, (
+        f"{INTERFACE_MD} must hold exactly one fenced block starting with 'package loadid;', "
+        f"found {len(blocks)}")
     lcm_gen = os.environ.get("LOADID_LCM_GEN") or shutil.which("lcm-gen")
     if not lcm_gen:
         pytest.fail("lcm-gen not found (LOADID_LCM_GEN)")
-    src = tmp_path / "design.lcm"
-    src.write_text(m.group(1))
+    src = tmp_path / "interface.lcm"
+    src.write_text(blocks[0])
     out = tmp_path / "py"
     subprocess.run([lcm_gen, "--python", "--ppath", str(out), str(src)], check=True, timeout=60)
     generated = sorted(p.stem for p in (out / "loadid").glob("*_t.py"))
     assert generated == sorted(TYPES)
     for type_name in TYPES:
-        spec = importlib.util.spec_from_file_location(f"design_{type_name}",
+        spec = importlib.util.spec_from_file_location(f"interface_{type_name}",
                                                       out / "loadid" / f"{type_name}.py")
         mod = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(mod)
