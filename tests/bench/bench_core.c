@@ -679,7 +679,7 @@ int main(int argc, char **argv) {
                    (double)res[i].info->condition_number);
         } else {
             const double m = (double)res[i].phi[0];
-            printf("    %-9s mass %.5f kg (error %.2f %%), m*c [%.5f %.5f %.5f] kg m, kappa %.3g, noise ratio %.3f",
+            printf("    %-9s mass %.5f kg (error %.2f %%), m*c [%.5f %.5f %.5f] kg m, condition_number %.3g, noise ratio %.3f",
                    res[i].name, m, 100.0 * fabs(m - m_true) / m_true, (double)res[i].phi[1], (double)res[i].phi[2],
                    (double)res[i].phi[3], (double)res[i].info->condition_number,
                    (double)res[i].info->noise_ratio);

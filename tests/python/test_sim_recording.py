@@ -265,8 +265,8 @@ def test_kappa_table_structure(recording, trajectory, tmp_path):
     # without weights and with the estimator's.
     assert clean[0] == loud[0]
     traj_text = (trajectory / "traj.yaml").read_text()
-    plain = float(re.search(r"^kappa_set_plain: (\S+)$", traj_text, re.M).group(1))
-    design = float(re.search(r"^kappa_set: (\S+)$", traj_text, re.M).group(1))
+    plain = float(re.search(r"^kappa_set: (\S+)$", traj_text, re.M).group(1))
+    design = float(re.search(r"^kappa_design: (\S+)$", traj_text, re.M).group(1))
     assert abs(clean[0] - plain) <= 0.03 * plain
     assert abs(float(weighted[1].split()[3]) - design) <= 0.03 * design
     # Noisy accelerometers (Table I): kappa_sens clearly above kappa_set,

@@ -66,7 +66,7 @@ static void usage(FILE *f) {
 
 static void progress(void *ctx, const char *stage, int done, int total, double best) {
     (void)ctx;
-    if (done == total) printf("  %-11s %5d candidates, best kappa %.4g\n", stage, total, best);
+    if (done == total) printf("  %-11s %5d candidates, best kappa_design %.4g\n", stage, total, best);
 }
 
 static int remove_entry(const char *path, const struct stat *st, int flag, struct FTW *ftw) {
@@ -131,7 +131,7 @@ static void print_results(const loadid_config_t *cfg, const loadid_pipeline_esti
         for (int i = 0; i < 10; ++i) phi[i] = (loadid_real_t)est[m].phi[i];
         loadid_relative_error(phi, truth, 10, e); /* eq. (37) */
         for (int i = 0; i < 10; ++i) err[m][i] = (double)e[i], mean[m] += (double)e[i] / 10;
-        printf("%-9s %lld samples, kappa %.3g, sigma_min %.3g, physically consistent: %s\n", name,
+        printf("%-9s %lld samples, condition_number %.3g, sigma_min %.3g, physically consistent: %s\n", name,
                (long long)est[m].samples, est[m].condition_number, est[m].sigma_min,
                est[m].physically_consistent ? "yes" : "no");
         if (cfg->offset_model_estimate)
@@ -229,7 +229,7 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s: no trajectory within the limits was found\n", prog);
         return 1;
     }
-    printf("  kappa_set %.4g (weighted data matrix, setpoints at 1 kHz)\n", kappa);
+    printf("  kappa_design %.4g (the weighted data matrix D A T of the setpoints at 1 kHz)\n", kappa);
 
     char tmp[] = "/tmp/loadid-demo-XXXXXX";
     const char *dir = keep ? keep : mkdtemp(tmp);
@@ -237,7 +237,7 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s: cannot make a temporary folder: %s\n", prog, strerror(errno));
         return 1;
     }
-    loadid_sim_options_t opt = {.cfg = &cfg, .chain = &chain, .traj = &tr, .kappa_set = kappa,
+    loadid_sim_options_t opt = {.cfg = &cfg, .chain = &chain, .traj = &tr, .kappa_design = kappa,
                                 .traj_path = "(designed by loadid-demo)", .out_dir = dir,
                                 .load_name = "o1", .seed = seed,
                                 .start_utime = 1700000000000000LL};

@@ -59,7 +59,8 @@ static void usage(FILE *out) {
             "from the joint Kalman filter), kappa_kf from the encoders alone; the layout\n"
             "of Table I of Kubus et al. (2008): kappa of the plain data matrix A (eq. 12's\n"
             "Upsilon = A^T A has kappa^2). --weighted gives kappa of D A T with the\n"
-            "weights the JR3's noise levels give (noise.*), as loadid-traj's kappa_set.\n",
+            "weights the JR3's noise levels give (noise.*), named kappa_*_w; kappa_set_w is\n"
+            "loadid-traj's kappa_design (its setpoints at 1 kHz).\n",
             prog);
 }
 
@@ -222,8 +223,9 @@ int main(int argc, char **argv) {
     static loadid_config_t cfg;
     loadid_chain_t chain;
     if (loadid_setup_load(prog, config_path, &cfg, &chain) != 0) return 1;
-    printf("%-28s %-10s %8s %10s %10s %10s\n", "recording", "load", "samples", "kappa_set",
-           "kappa_sens", "kappa_kf");
+    printf("%-28s %-10s %8s %10s %10s %10s\n", "recording", "load", "samples",
+           weighted ? "kappa_set_w" : "kappa_set", weighted ? "kappa_sens_w" : "kappa_sens",
+           weighted ? "kappa_kf_w" : "kappa_kf");
     int failed = 0;
     for (int i = optind; i < argc; ++i) {
         double kappa[KAPPAS];

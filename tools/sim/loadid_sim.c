@@ -50,7 +50,7 @@ static struct {
     loadid_config_t cfg;
     loadid_chain_t chain;
     loadid_fourier_traj_t traj;
-    double kappa_set;
+    double kappa_design;
     loadid_damage_t damage;
 } s;
 
@@ -157,7 +157,7 @@ int main(int argc, char **argv) {
     }
     const uint64_t the_seed = seed >= 0 ? (uint64_t)seed : s.cfg.sim_seed;
     char names[LOADID_MAX_JOINTS][LOADID_NAME_MAX];
-    if (loadid_traj_file_read(traj_path, &s.traj, names, &s.kappa_set, err, sizeof err) != 0) {
+    if (loadid_traj_file_read(traj_path, &s.traj, names, &s.kappa_design, err, sizeof err) != 0) {
         fprintf(stderr, "%s: %s\n", prog, err);
         return 1;
     }
@@ -176,7 +176,7 @@ int main(int argc, char **argv) {
         .cfg = &s.cfg,
         .chain = &s.chain,
         .traj = &s.traj,
-        .kappa_set = s.kappa_set,
+        .kappa_design = s.kappa_design,
         .traj_path = traj_path,
         .out_dir = out_dir,
         .values_path = values_path,

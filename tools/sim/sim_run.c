@@ -42,7 +42,7 @@ typedef struct {
     loadid_chain_t chain;
     loadid_kin_t *kin;
     loadid_fourier_traj_t traj;
-    double kappa_set;
+    double kappa_design;
     loadid_jr3_config_t jr3;
     loadid_servo_t servo;
     loadid_rng_t rng;
@@ -258,7 +258,7 @@ static int write_truth(const sim_t *s, const char *dir, const char *traj_path,
     fprintf(f, "encoder_counts: %.17g\n", c->sim_encoder_counts);
     fprintf(f, "robot:\n  urdf: \"%s\"\n  base_link: \"%s\"\n  sensor_link: \"%s\"\n", c->robot_urdf,
             c->robot_base_link, c->robot_sensor_link);
-    fprintf(f, "trajectory:\n  file: \"%s\"\n  kappa_set: %.17g\n", traj_path, s->kappa_set);
+    fprintf(f, "trajectory:\n  file: \"%s\"\n  kappa_design: %.17g\n", traj_path, s->kappa_design);
     fprintf(f, "can:\n  interface: \"%s\"\n  base_id: 0x%X\n", c->can_interface, (unsigned)c->can_base_id);
     fprintf(f, "jr3_full_scale:\n");
     const char *g[4] = {"force", "moment", "linear", "angular"};
@@ -315,7 +315,7 @@ int loadid_sim_run(const loadid_sim_options_t *o, loadid_sim_summary_t *sum, cha
     s->cfg = *o->cfg;
     s->chain = *o->chain;
     s->traj = *o->traj;
-    s->kappa_set = o->kappa_set;
+    s->kappa_design = o->kappa_design;
     /* simulation.trajectory_scale: s_i(t) of eqs. (10)-(11) is linear in
      * the coefficients, so scaling them scales it (q_0 stays). */
     const double scale = s->cfg.sim_trajectory_scale;

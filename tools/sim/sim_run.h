@@ -46,7 +46,7 @@ typedef struct {
     const loadid_config_t *cfg;        /* robot, noise, simulation.*, jr3.*, can.*, distal */
     const loadid_chain_t *chain;       /* the robot's chain (from cfg's URDF) */
     const loadid_fourier_traj_t *traj; /* its joints in the chain's order */
-    double kappa_set;                  /* the trajectory file's, for truth.yaml */
+    double kappa_design;               /* the trajectory file's, for truth.yaml */
     const char *traj_path;             /* for truth.yaml */
     const char *out_dir;               /* created if missing */
     const char *values_path;           /* NULL, or the --values CSV */

@@ -1318,7 +1318,7 @@ def main(argv=None) -> int:
         tp = work / "traj" / f"{robot}-mc300-c1-e800.yaml"
         if not tp.is_file():
             r = run(build, "traj", ["--config", cfg, *TRAJ_BUDGET, "--out", tp], log=log)
-            kappa = [l for l in r.stderr.splitlines() if "kappa_set" in l]
+            kappa = [l for l in r.stderr.splitlines() if "kappa_design" in l]
             log(f"trajectory {robot}: {(kappa or [r.stderr.strip()])[-1]} -> {tp}")
         else:
             log(f"trajectory {robot}: cached {tp}")

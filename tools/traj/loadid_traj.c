@@ -4,7 +4,7 @@
  * (eqs. 14-15), minimising the condition number of the estimator's
  * weighted data matrix from setpoint kinematics, within the joint limits
  * and the workspace. Writes the trajectory file (YAML) and the 1 kHz
- * setpoint samples (CSV), and reports kappa_set.
+ * setpoint samples (CSV), and reports kappa_design.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -33,8 +33,9 @@ static void usage(FILE *out) {
             "of the configuration (robot.*, trajectory.*, noise.*, estimation.offset_model;\n"
             "defaults without --config: the shipped RX60). Writes the trajectory as YAML\n"
             "(--out, default stdout) and the 1 kHz setpoints as CSV (--setpoints), and\n"
-            "prints kappa_set, the condition number of the estimator's weighted data\n"
-            "matrix over the active part, on stderr. Options override trajectory.*.\n",
+            "prints kappa_design, the condition number of the estimator's data matrix\n"
+            "from the setpoints over the active part, weighted with noise.* (D A T), on\n"
+            "stderr. Options override trajectory.*.\n",
             prog);
 }
 
@@ -179,11 +180,11 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s: design failed: %s\n", prog, loadid_strerror(rc));
         return 1;
     }
-    const double kappa_set = loadid_traj_kappa(&p, &tr, 1000);
+    const double kappa_design = loadid_traj_kappa(&p, &tr, 1000);
     loadid_traj_problem_t plain = p; /* the same data matrix without weights */
     loadid_est_config_default(LOADID_METHOD_RLS, n_params, &plain.est);
     loadid_traj_file_info_t info = {cfg.robot_urdf, cfg.robot_base_link, cfg.robot_sensor_link,
-                                    &chain, kappa_set, res.kappa_monte_carlo,
+                                    &chain, kappa_design, res.kappa_monte_carlo,
                                     loadid_traj_kappa(&plain, &tr, 1000), cfg.traj_seed};
     FILE *out = out_path ? fopen(out_path, "w") : stdout;
     if (!out || loadid_traj_file_write(out, &tr, &p.limits, &info) != 0 ||
@@ -200,9 +201,9 @@ int main(int argc, char **argv) {
         }
     }
     fprintf(stderr,
-            "%s: kappa_set %.4g (Monte Carlo start %.4g, %d of %d candidates within the limits, "
+            "%s: kappa_design %.4g (Monte Carlo start %.4g, %d of %d candidates within the limits, "
             "%d evaluations)\n",
-            prog, kappa_set, res.kappa_monte_carlo, res.feasible_candidates, cfg.traj_monte_carlo,
+            prog, kappa_design, res.kappa_monte_carlo, res.feasible_candidates, cfg.traj_monte_carlo,
             res.evaluations);
     loadid_kin_destroy(kin);
     return 0;

@@ -62,9 +62,9 @@ int loadid_traj_file_write(FILE *out, const loadid_fourier_traj_t *tr,
     key_list(out, "  ", "workspace_max", limits->ws_max, 3);
     fprintf(out, "  floor_z: ");
     number(out, limits->floor_z);
-    fprintf(out, "\nkappa_set: %.17g\nkappa_upsilon: %.17g\nkappa_set_plain: %.17g\n"
+    fprintf(out, "\nkappa_design: %.17g\nkappa_upsilon: %.17g\nkappa_set: %.17g\n"
                  "kappa_monte_carlo: %.17g\n",
-            info->kappa_set, info->kappa_set * info->kappa_set, info->kappa_set_plain,
+            info->kappa_design, info->kappa_design * info->kappa_design, info->kappa_set,
             info->kappa_monte_carlo);
     fprintf(out, "seed: %llu\n", (unsigned long long)info->seed);
     return ferror(out) ? -1 : 0;
@@ -114,7 +114,7 @@ static int required(int rc, loadid_yaml_node_t *root, const char *key) {
 }
 
 static int read_doc(loadid_yaml_doc_t *doc, loadid_fourier_traj_t *tr,
-                    char names[][LOADID_NAME_MAX], double *kappa_set) {
+                    char names[][LOADID_NAME_MAX], double *kappa_design) {
     loadid_yaml_node_t *root = loadid_yaml_root(doc);
     if (!root || loadid_yaml_kind(root) != LOADID_YAML_MAPPING)
         return root ? loadid_yaml_fail(root, "expected a mapping") : -EINVAL;
@@ -146,9 +146,9 @@ static int read_doc(loadid_yaml_doc_t *doc, loadid_fourier_traj_t *tr,
     if ((rc = read_rows(root, "rho", tr->num_joints, tr->harmonics, tr->rho)) ||
         (rc = read_rows(root, "delta", tr->num_joints, tr->harmonics, tr->delta)))
         return rc;
-    if (kappa_set) {
-        *kappa_set = NAN;
-        if ((rc = loadid_yaml_get_double(root, "kappa_set", kappa_set)) < 0) return rc;
+    if (kappa_design) {
+        *kappa_design = NAN;
+        if ((rc = loadid_yaml_get_double(root, "kappa_design", kappa_design)) < 0) return rc;
     }
     if (names) {
         loadid_yaml_node_t *robot, *joints;
@@ -166,13 +166,13 @@ static int read_doc(loadid_yaml_doc_t *doc, loadid_fourier_traj_t *tr,
 }
 
 int loadid_traj_file_read(const char *path, loadid_fourier_traj_t *tr,
-                          char names[][LOADID_NAME_MAX], double *kappa_set, char *err,
+                          char names[][LOADID_NAME_MAX], double *kappa_design, char *err,
                           size_t errlen) {
     loadid_yaml_doc_t *doc = NULL;
     int rc = loadid_yaml_load_file(path, &doc, err, errlen);
     if (rc != 0) return rc;
     loadid_fourier_traj_t tmp;
-    rc = read_doc(doc, &tmp, names, kappa_set);
+    rc = read_doc(doc, &tmp, names, kappa_design);
     if (rc != 0) {
         if (err && errlen) snprintf(err, errlen, "%s", loadid_yaml_error(doc));
     } else {

@@ -16,9 +16,10 @@
  *   delta: [[N numbers] x n]  # cosine coefficients
  *   limits: {position_lower, position_upper, velocity, acceleration,
  *            workspace_min, workspace_max, floor_z}
- *   kappa_set: x              # kappa(D A T) over the active part at 1 kHz
- *   kappa_upsilon: x          # kappa of eq. (12) with the weights, = kappa_set^2
- *   kappa_set_plain: x        # kappa(A) without weights (loadid-kappa's)
+ *   kappa_design: x           # kappa(D A T) over the active part at 1 kHz, the
+ *                             # weights from noise.*: what the designer minimises
+ *   kappa_upsilon: x          # kappa of eq. (12) with the weights, = kappa_design^2
+ *   kappa_set: x              # kappa(A) without weights: Table I's (loadid-kappa's)
  *   kappa_monte_carlo: x      # best Monte Carlo start (objective rate)
  *   seed: n
  */
@@ -40,8 +41,8 @@ extern "C" {
 typedef struct {
     const char *urdf, *base_link, *sensor_link;
     const loadid_chain_t *chain;  /* joint names */
-    double kappa_set, kappa_monte_carlo;
-    double kappa_set_plain;       /* kappa of A without weights */
+    double kappa_design, kappa_monte_carlo; /* kappa(D A T) */
+    double kappa_set;             /* kappa of A without weights (Table I) */
     uint64_t seed;
 } loadid_traj_file_info_t;
 
@@ -51,11 +52,11 @@ int loadid_traj_file_write(FILE *out, const loadid_fourier_traj_t *tr,
                            const loadid_traj_file_info_t *info);
 
 /* Reads a trajectory file: the series and fades into tr, the joint names
- * into names (LOADID_MAX_JOINTS x LOADID_NAME_MAX, may be NULL), kappa_set
+ * into names (LOADID_MAX_JOINTS x LOADID_NAME_MAX, may be NULL), kappa_design
  * (may be NULL; NAN when absent). Returns 0, or a negative code with
  * "FILE:LINE: KEY: what" (or "FILE: cannot read: ...") in err. */
 int loadid_traj_file_read(const char *path, loadid_fourier_traj_t *tr,
-                          char names[][LOADID_NAME_MAX], double *kappa_set, char *err,
+                          char names[][LOADID_NAME_MAX], double *kappa_design, char *err,
                           size_t errlen);
 
 /* Writes "t,q1..qn,qd1..qdn,qdd1..qddn" at rate_hz over [0, t_3]. */
