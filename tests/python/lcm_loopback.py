@@ -49,9 +49,10 @@ def open_session(pydir, rec):
 class Outputs:
     """estimate_t, status_t, wrench_t and load_model_t from the daemon, decoded with
     lcm-gen's Python types; reencoded_differ counts the messages whose
-    re-encoding differs from the bytes received."""
+    re-encoding differs from the bytes received. prefix: the daemon's
+    lcm.channel_prefix."""
 
-    def __init__(self, lc, types):
+    def __init__(self, lc, types, prefix=""):
         self.lc = lc
         self.got = {"estimate": [], "status": [], "wrench": [], "model": []}
         self.reencoded_differ = 0
@@ -59,7 +60,7 @@ class Outputs:
                                    ("status", "LOADID_STATUS", types.status_t),
                                    ("wrench", "LOADID_WRENCH", types.wrench_t),
                                    ("model", "LOADID_MODEL", types.load_model_t)):
-            lc.subscribe(channel, self._keeper(kind, cls))
+            lc.subscribe(prefix + channel, self._keeper(kind, cls))
 
     def _keeper(self, kind, cls):
         def handler(channel, data):
