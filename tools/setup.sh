@@ -12,43 +12,51 @@
 # System packages come only from Debian (apt-get), Python packages only from
 # PyPI, pinned in tools/requirements.txt, installed into build/venv. Nothing
 # else is downloaded. Every step is idempotent: a second run installs nothing
-# and only rebuilds what changed.
+# and only rebuilds what changed. Each step prints one line; apt's, pip's
+# and the builds' output goes to build/logs/ (its tail is shown on failure).
 set -euo pipefail
 
 # Debian packages (bookworm, main). Keep one group per line, with its reason.
-DEBIAN_PACKAGES=(
+# What the build and the demo need:
+BUILD_PACKAGES=(
   # compilers and the build: gcc/g++/make, cmake (presets need >= 3.25), ninja
   build-essential cmake ninja-build pkg-config
-  # the fuzz preset: clang 14, and libFuzzer (libclang_rt.fuzzer), which
-  # clang only recommends
-  clang libclang-rt-14-dev
-  # libraries of the estimation core and of the unit tests
+  # libraries of the estimation core and of the unit tests (built with it)
   libeigen3-dev libcmocka-dev
   # the robot model: URDF reader (kinematics of the sensor frame)
   liburdfdom-dev
   # the wire formats: LCM (lcm-gen, the C library; lcm.pc requires glib's .pc)
-  # and can-utils (candump, canplayer)
-  liblcm-dev liblcm-bin libglib2.0-dev can-utils
+  liblcm-dev liblcm-bin libglib2.0-dev
   # the configuration (YAML, libyaml) and the trajectory designer's optimiser (NLopt)
   libyaml-dev libnlopt-dev
   # the serial F/T sensor: Modbus RTU (libmodbus)
   libmodbus-dev
-  # the LCM test's private network namespace (ip; unshare is in util-linux)
+  # sd_notify for the systemd unit (Type=notify, WatchdogSec)
+  libsystemd-dev
+  # the Debian Python that makes build/venv (its packages come from PyPI)
+  python3 python3-venv
+  # HTTPS to PyPI for pip, and git for working in the clone
+  ca-certificates git
+)
+# What only the tests (and bench_live) need besides:
+TEST_PACKAGES=(
+  # the fuzz preset: clang 14, and libFuzzer (libclang_rt.fuzzer), which
+  # clang only recommends
+  clang libclang-rt-14-dev
+  # candump and canplayer (the VM's tests)
+  can-utils
+  # the live tests' private network namespace (ip; unshare is in util-linux)
   iproute2
-  # sd_notify for the systemd unit (Type=notify, WatchdogSec); the unit's
-  # test: systemd-analyze (security, syscall-filter) and strace
-  libsystemd-dev systemd strace
+  # the unit's test: systemd-analyze (security, syscall-filter) and strace
+  systemd strace
   # the vcan test's virtual machine: qemu, busybox for its initramfs, cpio
   qemu-system-x86 busybox-static cpio
   # lcm-spy with the project's types: Java, lcm.jar, jchart2d; Xvfb and a screenshot.
   # The headless JDK compiles the jar; lcm-spy's window needs the JRE's AWT
   # X11 library (libawt_xawt.so), which only default-jre brings.
   default-jdk-headless default-jre liblcm-java libjchart2d-java xvfb imagemagick
-  # the Debian Python that makes build/venv (its packages come from PyPI)
-  python3 python3-venv
-  # HTTPS to PyPI for pip, and git for working in the clone
-  ca-certificates git
 )
+DEBIAN_PACKAGES=("${BUILD_PACKAGES[@]}")
 
 # The Debian tools, by absolute path: a different python3 or cmake that comes
 # first on PATH (pyenv, pip, /usr/local) must not be picked up.
@@ -69,9 +77,11 @@ usage() {
 usage: bash tools/setup.sh COMMAND [ARGS]
 
 commands:
-  deps         install missing Debian packages (apt-get) and the Python
-               virtual environment build/venv (pinned, tools/requirements.txt)
-  demo [ARGS]  deps, build the release preset, run loadid-demo with ARGS
+  deps         install missing Debian packages (apt-get; the build's and the
+               tests') and the Python virtual environment build/venv
+               (pinned, tools/requirements.txt)
+  demo [ARGS]  the build's packages only (not the tests' qemu, JDK, clang),
+               build the release preset, run loadid-demo with ARGS
   test         deps, build the release, asan and fuzz presets, run every ctest
                test; each fuzz target fuzzes 30 s only when CI=true or
                LOADID_FUZZ_TIME=1 (else its seeds are replayed)
@@ -81,6 +91,22 @@ EOF
 
 say() { printf '== %s  [%ss]\n' "$*" "$SECONDS"; } # seconds since start
 die() { printf 'setup.sh: %s\n' "$*" >&2; exit 1; }
+
+# quietly NAME CMD...: runs CMD with its output in build/logs/NAME.log; on
+# failure prints the log's last 40 lines and where all of it is.
+LOGS=build/logs
+quietly() {
+  local name=$1 rc=0
+  shift
+  mkdir -p "$LOGS"
+  "$@" >"$LOGS/$name.log" 2>&1 || rc=$?
+  if ((rc != 0)); then
+    tail -n 40 "$LOGS/$name.log" >&2
+    printf 'setup.sh: %s failed (exit %d); the whole output: %s\n' "$name" "$rc" \
+      "$LOGS/$name.log" >&2
+  fi
+  return "$rc"
+}
 
 # --- Debian packages ---------------------------------------------------------
 
@@ -108,10 +134,10 @@ install_debian_packages() {
     as_root=(sudo)
     [[ -t 0 ]] || as_root+=(-n) # no terminal to ask a password on: fail fast
   fi
-  say "installing Debian packages: ${missing[*]}"
-  "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -q
-  "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive \
-    apt-get install -y -q --no-install-recommends "${missing[@]}"
+  say "installing ${#missing[@]} Debian packages (log: $LOGS/apt.log): ${missing[*]}"
+  quietly apt "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -q || exit 1
+  quietly apt-install "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive \
+    apt-get install -y -q --no-install-recommends "${missing[@]}" || exit 1
   mapfile -t missing < <(missing_packages)
   ((${#missing[@]} == 0)) || die "apt-get did not install: ${missing[*]}"
 }
@@ -137,7 +163,7 @@ make_venv() {
     say "Python packages: up to date ($REQUIREMENTS)"
     return
   fi
-  say "installing Python packages from PyPI ($REQUIREMENTS)"
+  say "installing Python packages from PyPI ($REQUIREMENTS; log: $LOGS/pip.log)"
   rm -f "$STAMP"
   # --isolated: ignore pip's configuration files and PIP_* variables (such as
   # PIP_FIND_LINKS or PIP_EXTRA_INDEX_URL), so PyPI is the only source.
@@ -147,14 +173,17 @@ make_venv() {
   if [[ -f /etc/ssl/certs/ca-certificates.crt ]]; then
     cert=(--cert /etc/ssl/certs/ca-certificates.crt)
   fi
-  "$VENV/bin/python" -m pip install --isolated --no-input --disable-pip-version-check \
-    --index-url "$PYPI_INDEX" --only-binary=:all: --timeout 60 "${cert[@]}" \
-    -r "$REQUIREMENTS"
-  "$VENV/bin/python" -m pip check --isolated --disable-pip-version-check
+  quietly pip "$VENV/bin/python" -m pip install --isolated --no-input \
+    --disable-pip-version-check --index-url "$PYPI_INDEX" --only-binary=:all: --timeout 60 \
+    "${cert[@]}" -r "$REQUIREMENTS" || exit 1
+  quietly pip-check "$VENV/bin/python" -m pip check --isolated --disable-pip-version-check \
+    || exit 1
   printf '%s\n' "$want" >"$STAMP"
 }
 
-deps() {
+deps() { # deps [test]: the build's packages, and with `test` the tests' too
+  DEBIAN_PACKAGES=("${BUILD_PACKAGES[@]}")
+  [[ "${1:-}" == test ]] && DEBIAN_PACKAGES+=("${TEST_PACKAGES[@]}")
   install_debian_packages
   make_venv
 }
@@ -162,10 +191,9 @@ deps() {
 # --- builds ------------------------------------------------------------------
 
 build() { # build PRESET (explicit returns: callers may test it in an `if`)
-  say "configuring $1"
-  "$CMAKE" --preset "$1" || return 1
-  say "building $1"
-  "$CMAKE" --build --preset "$1" || return 1
+  say "configuring and building $1 (log: $LOGS/build-$1.log)"
+  quietly "build-$1" sh -c '"$1" --preset "$2" && "$1" --build --preset "$2"' sh "$CMAKE" "$1" \
+    || return 1
 }
 
 # run_tests PRESET [CTEST ARGS]: runs ctest, prints nothing of its own; sets
@@ -192,7 +220,7 @@ run_tests() {
 }
 
 cmd_test() {
-  deps
+  deps test
   local -a presets=(release asan fuzz) built=() summary=() args
   local i ok=1
   for i in "${!presets[@]}"; do
@@ -236,7 +264,7 @@ main() {
   case "$cmd" in
     deps)
       (($# == 0)) || { usage >&2; exit 2; }
-      deps
+      deps test
       ;;
     demo)
       deps
@@ -250,7 +278,7 @@ main() {
       ;;
     bench)
       (($# == 0)) || { usage >&2; exit 2; }
-      deps
+      deps test # bench_live runs in a network namespace (iproute2)
       build release
       say "running build/release/tests/bench_core"
       build/release/tests/bench_core
