@@ -99,6 +99,12 @@ typedef struct {
     double mono_t0;
     int file_done;                /* the file is replayed; the CAN input is quiet */
     int64_t can_errors, can_reopens, error_frames;
+    double can_lost_us;           /* when the CAN socket failed (mono) */
+    int64_t can_frames;           /* frames read from the CAN socket */
+    uint32_t can_drops_seen;      /* the socket's cumulative drop count (SO_RXQ_OVFL) */
+    int64_t can_drops;            /* frames the kernel dropped, over every socket */
+    int64_t can_drops_logged, can_drops_frames; /* logged so far; frames read when last grown */
+    double can_drops_warned_us;   /* throttles their log line */
     loadid_modbus_input_t *ft;    /* sensor.type modbus, else NULL */
     int64_t ft_connected;         /* the poller's last reported state */
     uint32_t hist[HIST_BINS];
@@ -350,10 +356,35 @@ static void record_loop_time(live_t *L, double dt) {
     if (dt > L->loop_max_us) L->loop_max_us = dt;
 }
 
+/* Frames the kernel dropped for a full receive buffer (the loop held up):
+ * logged when the count grew, the first time at once, then at most a line
+ * a second (the 1 Hz tick logs what waited). status_t has no field for
+ * them; what they cost shows there as incomplete samples and sequence gaps. */
+static void log_can_drops(live_t *L) {
+    const double now = mono_us();
+    if (L->can_drops == L->can_drops_logged ||
+        (L->can_drops_logged > 0 && now - L->can_drops_warned_us < 1e6))
+        return;
+    fprintf(stderr, "loadidd: CAN %s: %lld frames dropped by the kernel, the socket's receive "
+                    "buffer full (%lld in all, learnt after %lld frames read)\n",
+            L->cfg->can_interface, (long long)(L->can_drops - L->can_drops_logged),
+            (long long)L->can_drops, (long long)L->can_drops_frames);
+    L->can_drops_logged = L->can_drops;
+    L->can_drops_warned_us = now;
+}
+
 static void read_socket(live_t *L) {
     loadid_can_frame_t f;
     int rc;
-    while ((rc = loadid_socketcan_read(L->can_fd, &f)) > 0) {
+    uint32_t drops = L->can_drops_seen;
+    while ((rc = loadid_socketcan_read(L->can_fd, &f, &drops)) > 0) {
+        if (drops != L->can_drops_seen) { /* cumulative, wrapping: the difference */
+            L->can_drops += (uint32_t)(drops - L->can_drops_seen);
+            L->can_drops_seen = drops;
+            L->can_drops_frames = L->can_frames;
+            log_can_drops(L);
+        }
+        L->can_frames++;
         if (rc == 2) L->error_frames++;
         else loadid_pipeline_can_frame(L->pipe, &f);
     }
@@ -362,6 +393,8 @@ static void read_socket(live_t *L) {
         L->can_errors++;
         close(L->can_fd);
         L->can_fd = -1;
+        L->can_lost_us = mono_us();
+        L->can_drops_seen = 0; /* a new socket counts from 0 */
     }
 }
 
@@ -641,9 +674,11 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                                                              err, sizeof err);
                             if (L.can_fd >= 0) {
                                 add_fd(ep, L.can_fd, TAG_CAN), L.can_reopens++;
-                                fprintf(stderr, "loadidd: CAN %s open again\n", cfg->can_interface);
+                                fprintf(stderr, "loadidd: CAN %s open again after %.3f s\n",
+                                        cfg->can_interface, (mono_us() - L.can_lost_us) / 1e6);
                             }
                         }
+                        log_can_drops(&L); /* what waited for the throttle */
                     }
                     break;
                 case TAG_SIGNAL: stop = 1; break;
@@ -665,12 +700,12 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         fprintf(stderr,
                 "loadidd: samples ok %lld, used %lld, frames bad %lld, incomplete %lld, "
                 "saturated %lld, faulty %lld, gaps %lld, joint msgs bad %lld, stale %lld, "
-                "CAN errors %lld, error frames %lld, commands refused %lld\n",
+                "CAN errors %lld, CAN drops %lld, error frames %lld, commands refused %lld\n",
                 (long long)st.samples_ok, (long long)st.samples_used, (long long)st.frames_bad,
                 (long long)st.samples_incomplete, (long long)st.samples_saturated,
                 (long long)st.samples_faulty, (long long)st.sequence_gaps,
                 (long long)st.joint_msgs_bad, (long long)st.samples_stale,
-                (long long)L.can_errors, (long long)L.error_frames,
+                (long long)L.can_errors, (long long)L.can_drops, (long long)L.error_frames,
                 (long long)L.commands_refused);
         loadid_modbus_input_stats_t ms;
         if (L.ft && loadid_modbus_input_stats(L.ft, &ms) == 0)

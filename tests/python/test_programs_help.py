@@ -47,7 +47,7 @@ def test_the_list_is_the_build_s():
     names = {name for name, _ in PROGRAMS}
     for must in ("loadidd", "loadid", "loadid-sim", "loadid-traj", "loadid-kappa",
                  "loadid-modbus-sim", "loadid-replay", "loadid-record", "loadid-demo",
-                 "bench_core", "bench_signals", "bench_pipeline", "estimate_watch",
+                 "bench_core", "bench_signals", "bench_pipeline", "estimate_watch", "can_flood",
                  "jr3_encode_log", "jr3_decode_log", "lcm_encode_samples", "loadid-spy",
                  "loadid-study", "setup.sh"):
         assert must in names, f"{must} is not on the list: {sorted(names)}"

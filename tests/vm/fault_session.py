@@ -30,12 +30,33 @@ SAMPLE_PERIOD_US = 10_000         # 100 Hz: slow enough for TCG
 JOINT_PERIOD_US = 2_000           # 500 Hz joint states
 FIRST_SEQUENCE = 200              # wraps 255 -> 0 during the session
 # The parts, replayed in this order; between them the VM sends `loadid
-# zero` (after idle), `start` (after zeroing), `stop` (after window), and
-# removes and adds vcan0 (after done). The commands come from the CLI at
+# zero` (after idle), `start` (after zeroing), `stop` (after flood). status_t
+# must then count exactly what they hold. The commands come from the CLI at
 # the moment they act, after the daemon has read the part before, so that
 # which samples fall into zeroing and estimation does not depend on how far
 # the emulated CPUs lag behind a replay's schedule.
-PARTS = ("idle", "zeroing", "window", "done", "again")
+PARTS = ("idle", "zeroing", "window", "quiet", "flood", "done")
+# Good samples only, each PART_S long, while estimating: `quiet` alone and
+# `flood` beside can_flood's foreign frames at the full bus rate (the VM
+# reads the loop times during both).
+PART_S = 4
+FLOOD_RATE = 8000     # frames/s: 1 Mbit/s over 125 bits (an 8-byte frame: 111
+                      # bits, up to 24 more stuffed; 10 % stuffing on average)
+# A second run (`loadid start` after DONE, `stop` after it): OUTAGE_S of
+# good samples, vcan0 removed 1 s in and added again 1 s later. At most
+# about 2 s of samples are lost (the daemon reopens once a second), fewer
+# than the 256 sequence numbers the decoder can count as a gap.
+OUTAGE = "outage"
+OUTAGE_S = 4
+# Then a daemon of its own: OVERFLOW_PRE samples, the daemon stopped
+# (SIGSTOP), OVERFLOW_BURST samples more than its socket's receive buffer
+# holds (2 MiB with SO_RCVBUFFORCE as root: at most 9000 frames of 232
+# bytes, a sk_buff's size without its data), the daemon continued, then
+# OVERFLOW_POST samples, whose first frame brings the kernel's drop count.
+OVERFLOW = ("pre", "burst", "post")
+OVERFLOW_PRE = 10
+OVERFLOW_BURST = 3000
+OVERFLOW_POST = 10
 
 CONFIG = """robot:
   urdf: ../robot.urdf
@@ -78,14 +99,14 @@ class Session:
         self.can.append((t, can_id, extended, bytes(data)))
         self.end_us = max(self.end_us, t)
 
-    def _sample(self, t, status=(0, 0, 0, 0), groups=(0, 1, 2, 3)):
+    def _sample(self, t, status=(0, 0, 0, 0), groups=(0, 1, 2, 3), frame_us=100):
         counts = {0: (12, -40, 1640), 1: (-15, 20, 3), 2: (0, 0, 1638), 3: (2, -1, 0)}
         for i, g in enumerate(groups):   # 0.1 ms apart, as a 4 kHz bus would
-            self._frame(t + 100 * i, BASE + g, frame_data(counts[g], self.seq, status[g]))
+            self._frame(t + frame_us * i, BASE + g, frame_data(counts[g], self.seq, status[g]))
         self.seq = (self.seq + 1) & 0xFF
 
-    def good(self, t):
-        self._sample(t)
+    def good(self, t, frame_us=100):
+        self._sample(t, frame_us=frame_us)
         self.exp["samples_ok"] += 1
         if self.window:
             self.exp["est_samples"] += 1
@@ -185,9 +206,10 @@ class Session:
 
 
 def build(out_dir, lcm_python_dir):
-    """Writes the recording folders of PARTS (in this order) and
+    """Writes the recording folders of PARTS, OUTAGE and OVERFLOW and
     faults.yaml into out_dir; returns the counts status_t must show after
-    all of them (and est_samples: the good samples of the window part)."""
+    PARTS (est_samples: the good samples between START and STOP), and
+    the samples of each other part by name."""
     p = SAMPLE_PERIOD_US
     parts = {}
     seq = FIRST_SEQUENCE
@@ -245,37 +267,41 @@ def build(out_dir, lcm_python_dir):
     s.good(t)  # the last sample complete: what came before is all counted
     parts["window"] = s
 
-    # DONE: a few good samples (compensated wrenches).
-    s = Session(s.seq)
-    t = 20_000
-    for _ in range(10):
-        s.good(t); t += p
-    parts["done"] = s
+    def good_part(name, seq, n, period_us, window, frame_us=100):
+        s = Session(seq, window=window)
+        t = 20_000
+        for _ in range(n):
+            s.good(t, frame_us); t += period_us
+        parts[name] = s
+        return s.seq
 
-    # After vcan0 was removed and added again: the sequence goes on.
-    s = Session(s.seq)
-    t = 20_000
-    for k in range(30):
-        if k == 10:
-            s.saturated(t)
-        elif k == 20:
-            s.incomplete(t)
-        else:
-            s.good(t)
-        t += p
-    parts["again"] = s
+    # Still estimating: the same good samples, once alone and once beside
+    # the flood.
+    seq = good_part("quiet", s.seq, PART_S * 1_000_000 // p, p, True)
+    seq = good_part("flood", seq, PART_S * 1_000_000 // p, p, True)
+    # DONE: a few good samples (compensated wrenches).
+    seq = good_part("done", seq, 10, p, False)
+    # The second run, with vcan0 removed and added again inside it.
+    seq = good_part(OUTAGE, seq, OUTAGE_S * 1_000_000 // p, p, True)
+    # The overflow: a burst of samples 0.4 ms apart (10 000 frames/s).
+    seq = good_part("pre", seq, OVERFLOW_PRE, p, False)
+    seq = good_part("burst", seq, OVERFLOW_BURST, 400, False)
+    good_part("post", seq, OVERFLOW_POST, p, False)
 
     exp = Counter()
-    for name in PARTS:
+    for name in PARTS + (OUTAGE,) + OVERFLOW:
         parts[name].write(os.path.join(out_dir, name), lcm_python_dir)
-        exp += parts[name].exp
+        if name in PARTS:
+            exp += parts[name].exp
         with open(os.path.join(out_dir, name, "expected.json"), "w") as f:
             json.dump(dict(parts[name].exp), f)  # for the offline cross-check
     with open(os.path.join(out_dir, "faults.yaml"), "w") as f:
         f.write(CONFIG)
+    with open(os.path.join(out_dir, "flood.args"), "w") as f:
+        f.write(f"{FLOOD_RATE} {PART_S}\n")   # can_flood's RATE SECONDS
     exp = dict(exp)
     for k in ("samples_ok", "frames_bad", "samples_incomplete", "samples_saturated",
               "sequence_gaps", "joint_msgs_bad", "est_samples", "kernel_filtered",
               "full_scale_logs"):
         exp.setdefault(k, 0)
-    return exp, exp["est_samples"]
+    return exp, {name: parts[name].exp["samples_ok"] for name in (OUTAGE,) + OVERFLOW}

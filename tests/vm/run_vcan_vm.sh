@@ -8,12 +8,14 @@
 # loadid-replay puts the recording on both; loadid-record records a second
 # replay of it (sent back as a base64 tar). Then fault injection: loadidd
 # live on the hand-made parts in FAULTS_DIR (tests/vm/fault_session.py),
-# `loadid zero`, `start` and `stop` between them, vcan0 removed and added
-# again before the last part; `loadid status` and estimate_watch read back
-# what the daemon counted and estimated. Last, loadidd's refusal of a bad
-# configuration and of a missing interface. Everything is printed on the
-# serial console between LOADID-* markers; this script prints the console
-# and test_vcan_vm.py judges it.
+# `loadid zero`, `start` and `stop` between them, one part beside CAN_FLOOD's
+# foreign frames at the full bus rate; a second run with vcan0 removed and
+# added again inside it; `loadid status` and estimate_watch read back what
+# the daemon counted and estimated. Then a daemon stopped (SIGSTOP) while
+# more frames come than its socket holds: the kernel's drop count. Last,
+# loadidd's refusal of a bad configuration and of a missing interface.
+# Everything is printed on the serial console between LOADID-* markers;
+# this script prints the console and test_vcan_vm.py judges it.
 #
 # Timing: the test replays recordings in real time, and an emulated CPU
 # that the host's load starves falls behind them: the JR3 frames then carry
@@ -32,9 +34,9 @@
 # and gives the rest of the run a deadline in boots (test_vcan_vm.py).
 #
 # Usage: run_vcan_vm.sh WORKDIR LOADIDD LOADID_REPLAY RECORDING_DIR URDF
-#                       LOADID_CLI LOADID_RECORD ESTIMATE_WATCH FAULTS_DIR
+#                       LOADID_CLI LOADID_RECORD ESTIMATE_WATCH FAULTS_DIR CAN_FLOOD
 set -eu
-work=$1 loadidd=$2 replay=$3 rec=$4 urdf=$5 cli=$6 record=$7 watch=$8 faults=$9
+work=$1 loadidd=$2 replay=$3 rec=$4 urdf=$5 cli=$6 record=$7 watch=$8 faults=$9 flood=${10}
 mkdir -p "$work"
 cd "$work"
 
@@ -75,7 +77,7 @@ copy_prog() {
         cp -L "$lib" "$root$lib"
     done
 }
-for p in "$loadidd" "$replay" "$cli" "$record" "$watch" "$(command -v ip)" "$(command -v canplayer)" "$(command -v candump)"; do
+for p in "$loadidd" "$replay" "$cli" "$record" "$watch" "$flood" "$(command -v ip)" "$(command -v canplayer)" "$(command -v candump)"; do
     copy_prog "$p"
 done
 mkdir -p "$root/lib64"
@@ -180,35 +182,70 @@ echo "LOADID-RECORDING-END"
 
 # Fault injection: the hand-made parts of tests/vm/fault_session.py, with
 # the CLI's commands between them (each after the daemon has read the part
-# before), then vcan0 removed and added again while loadidd runs.
+# before). `loadid status` prints the daemon's next status_t (1 Hz).
 cd /data/faults
+status_block() {
+    echo "LOADID-$1-BEGIN"
+    loadid --config faults.yaml status --timeout 3 || echo "LOADID-VERDICT fail loadid status ($1)"
+    echo "LOADID-$1-END"
+}
 loadidd --config faults.yaml --verbose 2> /tmp/faults.err &
 daemon=$!
 estimate_watch > /tmp/estimates.txt &
 watcher=$!
 within 10000 daemon_up faults.yaml || echo "LOADID-VERDICT fail loadidd not up (faults)"
 sleep 0.5  # estimate_watch subscribed
-for step in "idle zero" "zeroing start" "window stop" "done -"; do
+for step in "idle zero" "zeroing start" "window -"; do
     set -- $step
     $pin loadid-replay --interface vcan0 $1
     sleep 0.3
     [ "$2" = - ] || loadid --config faults.yaml $2 --load-name faults
 done
-sleep 0.5
-ip link del dev vcan0
-sleep 1.5
-ip link add dev vcan0 type vcan && ip link set vcan0 up
-# Meanwhile loadid-record --duration, every channel: the daemon's status_t
-# (once a second).
-loadid-record --all-channels --duration 1.5 --out /tmp/short 2> /tmp/short.err &
-short=$!
-sleep 2.5  # the daemon retries once a second
-wait $short && echo "LOADID-SHORT-EXIT 0" || echo "LOADID-SHORT-EXIT $?"
-$pin loadid-replay --interface vcan0 again
+# Still estimating: `quiet`, then the same samples beside can_flood's
+# foreign frames at the full bus rate (flood.args: rate, seconds); the loop
+# times of two seconds inside each, and the counts after each.
+for part in quiet flood; do
+    flooder=
+    if [ $part = flood ]; then
+        can_flood vcan0 $(cat flood.args) > /tmp/flood.txt &
+        flooder=$!
+    fi
+    $pin loadid-replay --interface vcan0 $part &
+    replayer=$!
+    sleep 1.2
+    status_block LOOP-$part-1
+    status_block LOOP-$part-2
+    wait $replayer
+    [ -z "$flooder" ] || wait $flooder
+    sleep 0.3
+    status_block COUNTS-$part
+done
+cat /tmp/flood.txt
+loadid --config faults.yaml stop --load-name faults
+$pin loadid-replay --interface vcan0 done
+sleep 0.3
+status_block STATUS
+# A second run with vcan0 removed under it and added again a second later,
+# while the outage part's samples keep coming (loadid-replay keeps its
+# schedule and counts the frames it could not send).
+loadid --config faults.yaml start --load-name outage
+$pin loadid-replay --interface vcan0 outage 2> /tmp/outage.err &
+replayer=$!
 sleep 1
-echo "LOADID-STATUS-BEGIN"
-loadid --config faults.yaml status --timeout 3 || echo "LOADID-VERDICT fail loadid status"
-echo "LOADID-STATUS-END"
+gone=$(now_cs)
+ip link del dev vcan0
+sleep 1
+ip link add dev vcan0 type vcan && ip link set vcan0 up
+echo "LOADID-OUTAGE gone_cs $(( $(now_cs) - gone ))"
+wait $replayer
+sleep 0.3
+loadid --config faults.yaml stop --load-name outage
+status_block STATUS2
+cat /tmp/outage.err
+# loadid-record --duration, every channel: the daemon's status_t (once a
+# second), nothing on vcan0.
+loadid-record --all-channels --duration 1.5 --out /tmp/short 2> /tmp/short.err && \
+    echo "LOADID-SHORT-EXIT 0" || echo "LOADID-SHORT-EXIT $?"
 kill -0 $daemon && echo "LOADID-FAULTS-ALIVE"
 kill -TERM $daemon
 wait $daemon && echo "LOADID-FAULTS-EXIT 0" || echo "LOADID-FAULTS-EXIT $?"
@@ -218,6 +255,27 @@ echo "LOADID-FAULTS-BEGIN"
 cat /tmp/estimates.txt /tmp/faults.err
 echo "LOADID-FAULTS-END"
 cat /tmp/short.err
+
+# The socket's receive buffer overflowed: a daemon of its own, stopped
+# (SIGSTOP) while the burst part sends more frames than the buffer holds;
+# the post part's first frame brings the kernel's drop count.
+loadidd --config faults.yaml --verbose 2> /tmp/overflow.err &
+daemon=$!
+within 10000 daemon_up faults.yaml || echo "LOADID-VERDICT fail loadidd not up (overflow)"
+$pin loadid-replay --interface vcan0 pre
+sleep 0.3
+kill -STOP $daemon
+$pin loadid-replay --interface vcan0 burst
+kill -CONT $daemon
+sleep 0.5  # the buffer read: the post part's frames all fit
+$pin loadid-replay --interface vcan0 post
+sleep 0.3
+status_block OVERFLOW-STATUS
+kill -TERM $daemon
+wait $daemon && echo "LOADID-OVERFLOW-EXIT 0" || echo "LOADID-OVERFLOW-EXIT $?"
+echo "LOADID-OVERFLOW-BEGIN"
+cat /tmp/overflow.err
+echo "LOADID-OVERFLOW-END"
 cd /data
 
 # Refusals in live mode: one line on stderr, a non-zero exit.
@@ -225,6 +283,7 @@ for c in bad nosuch; do
     loadidd --config /data/$c.yaml 2> /tmp/$c.err && s=0 || s=$?
     echo "LOADID-REFUSAL $c exit $s lines $(wc -l < /tmp/$c.err): $(cat /tmp/$c.err)"
 done
+echo "LOADID-END uptime_cs $(now_cs)"
 echo "LOADID-VERDICT done"
 poweroff -f
 INIT

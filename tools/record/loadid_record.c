@@ -13,8 +13,10 @@
  *
  * Both times are wall-clock microseconds (SO_TIMESTAMP and LCM's
  * recv_utime), the one clock of DESIGN.md. Stops on SIGINT or SIGTERM, or
- * after --duration seconds, and prints what it recorded. An interface that
- * vanishes is reported and reopened once a second, as the daemon does.
+ * after --duration seconds, and prints what it recorded, with the frames
+ * the kernel dropped when the recorder fell behind (SO_RXQ_OVFL). An
+ * interface that vanishes is reported and reopened once a second, as the
+ * daemon does.
  */
 #define _GNU_SOURCE
 
@@ -193,6 +195,8 @@ int main(int argc, char **argv) {
     sigaction(SIGTERM, &sa, NULL);
 
     int64_t frames = 0, error_frames = 0, format_errors = 0, can_losses = 0, reopens = 0;
+    int64_t drops = 0;       /* frames the kernel dropped, its receive buffer full */
+    uint32_t drops_seen = 0; /* the open socket's cumulative count (SO_RXQ_OVFL) */
     int rc = 0;
     const double t_end = duration > 0 ? mono_s() + duration : INFINITY;
     double next_reopen = 0;
@@ -225,7 +229,9 @@ int main(int argc, char **argv) {
         if (can_fd >= 0 && pfd[1].revents) {
             loadid_can_frame_t f;
             int r;
-            while ((r = loadid_socketcan_read(can_fd, &f)) > 0) {
+            uint32_t d = drops_seen;
+            while ((r = loadid_socketcan_read(can_fd, &f, &d)) > 0) {
+                drops += (uint32_t)(d - drops_seen), drops_seen = d;
                 if (r == 2) { /* a bus error: not a frame of the recording */
                     error_frames++;
                     continue;
@@ -241,6 +247,7 @@ int main(int argc, char **argv) {
                 close(can_fd);
                 can_fd = -1;
                 can_losses++;
+                drops_seen = 0;
                 next_reopen = mono_s() + 1;
             }
         }
@@ -257,9 +264,11 @@ int main(int argc, char **argv) {
     if (!quiet)
         fprintf(stderr,
                 "%s: %lld CAN frames, %lld LCM events; %lld error frames, %lld unwritable "
-                "frames, interface lost %lld times, reopened %lld\n",
+                "frames, interface lost %lld times, reopened %lld, %lld frames dropped by "
+                "the kernel\n",
                 prog, (long long)frames, (long long)sink.events, (long long)error_frames,
-                (long long)format_errors, (long long)can_losses, (long long)reopens);
+                (long long)format_errors, (long long)can_losses, (long long)reopens,
+                (long long)drops);
     if (can_fd >= 0) close(can_fd);
     lcm_destroy(lcm);
     return rc;

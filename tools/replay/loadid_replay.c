@@ -4,7 +4,10 @@
  * relative timing (times a speed factor), the LCM messages' utime
  * rewritten to their scheduled time now (CAN frames get the kernel's
  * receive time anyway).
- * --loop repeats it. Recording a live session into the same format is
+ * --loop repeats it. When the interface goes away (deleted, down), the
+ * replay keeps its schedule, as a sensor on the bus would: the frames due
+ * meanwhile are lost, counted, and the interface is reopened at the next
+ * frame due once it is back. Recording a live session into the same format is
  * `candump -l -s 0 <if>` (can-utils) beside `lcm-logger` (lcm): see the
  * README.
  */
@@ -18,6 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "loadid/lcm_wire.h"
 #include "loadid/recording.h"
@@ -82,7 +86,42 @@ static int republish(lcm_t *lcm, const loadid_rec_event_t *ev, int64_t shift) {
     return n <= 0;
 }
 
-static int play(const char *dir, int can_fd, lcm_t *lcm, double speed, int64_t *sent) {
+/* What the CAN side did: frames lost while the interface was gone, and how
+ * often it went. */
+typedef struct {
+    const char *ifname;
+    int fd;                /* -1 while the interface is gone */
+    int64_t lost, gone;
+} can_out_t;
+
+/* One frame due now. Returns 0 (sent, or lost with the interface gone) or
+ * -errno (another failure). */
+static int send_frame(can_out_t *can, const loadid_can_frame_t *frame) {
+    char err[512];
+    if (can->fd < 0 && (can->fd = loadid_socketcan_open_tx(can->ifname, err, sizeof err)) >= 0)
+        fprintf(stderr, "%s: CAN %s back\n", prog, can->ifname);
+    if (can->fd < 0) {
+        can->lost++;
+        return 0;
+    }
+    int w;
+    while ((w = loadid_socketcan_write(can->fd, frame)) == -EAGAIN || w == -ENOBUFS) {
+        struct timespec ts = {0, 20000};
+        nanosleep(&ts, NULL);
+    }
+    if (w == -ENXIO || w == -ENODEV || w == -ENETDOWN) { /* gone: deleted or down */
+        fprintf(stderr, "%s: CAN %s: %s; frames lost until it is back\n", prog, can->ifname,
+                strerror(-w));
+        close(can->fd);
+        can->fd = -1;
+        can->lost++;
+        can->gone++;
+        return 0;
+    }
+    return w;
+}
+
+static int play(const char *dir, can_out_t *can, lcm_t *lcm, double speed, int64_t *sent) {
     char err[4400];
     loadid_recording_reader_t *rec = NULL;
     if (loadid_recording_reader_open(dir, &rec, err, sizeof err) != 0) {
@@ -98,11 +137,7 @@ static int play(const char *dir, int can_fd, lcm_t *lcm, double speed, int64_t *
         const int64_t due = start + (int64_t)llround((double)(ev.t_us - t0) / speed);
         sleep_until(due);
         if (ev.kind == LOADID_REC_CAN) {
-            int w;
-            while ((w = loadid_socketcan_write(can_fd, &ev.can)) == -EAGAIN || w == -ENOBUFS) {
-                struct timespec ts = {0, 20000};
-                nanosleep(&ts, NULL);
-            }
+            const int w = send_frame(can, &ev.can);
             if (w != 0) {
                 fprintf(stderr, "%s: CAN write: %s\n", prog, strerror(-w));
                 loadid_recording_reader_close(rec);
@@ -165,8 +200,8 @@ int main(int argc, char **argv) {
         return 2;
     }
     char err[512];
-    const int can_fd = loadid_socketcan_open_tx(ifname, err, sizeof err);
-    if (can_fd < 0) {
+    can_out_t can = {.ifname = ifname, .fd = loadid_socketcan_open_tx(ifname, err, sizeof err)};
+    if (can.fd < 0) {
         fprintf(stderr, "%s: %s\n", prog, err);
         return 1;
     }
@@ -178,9 +213,13 @@ int main(int argc, char **argv) {
     int64_t sent = 0;
     int rc;
     do {
-        rc = play(argv[optind], can_fd, lcm, speed, &sent);
+        rc = play(argv[optind], &can, lcm, speed, &sent);
     } while (loop && rc == 0);
-    fprintf(stderr, "%s: %lld frames and messages replayed\n", prog, (long long)sent);
+    fprintf(stderr, "%s: %lld frames and messages replayed\n", prog, (long long)sent - can.lost);
+    if (can.lost)
+        fprintf(stderr, "%s: %lld CAN frames lost: %s was gone %lld times\n", prog,
+                (long long)can.lost, ifname, (long long)can.gone);
+    if (can.fd >= 0) close(can.fd);
     lcm_destroy(lcm);
     return rc;
 }
