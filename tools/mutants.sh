@@ -7,7 +7,7 @@
 # caught, by which test, and how long it took. Every mutant must be caught.
 # A script for people, not part of CI: a full run takes about an hour here.
 #
-#   tools/mutants.sh [--list] [--only NAME]... [--keep] [--no-baseline]
+# usage: tools/mutants.sh [--list] [--only NAME]... [--keep] [--no-baseline]
 #
 # --list prints the mutants; --only runs the named ones; --keep leaves the
 # scratch worktree (default $MUTANTS_DIR or /tmp/loadid-mutants); without
