@@ -1,5 +1,5 @@
 /*
- * JR3 on CAN: encoder and decoder of DESIGN.md "JR3 over CAN" (see
+ * JR3 on CAN: encoder and decoder of docs/INTERFACE.md "JR3 over CAN" (see
  * loadid/jr3.h for the layout and the contract of every function).
  */
 #include "loadid/jr3.h"
@@ -10,7 +10,7 @@
 #include <string.h>
 
 /* base+4 units per group: full scale = units / divisor, i.e. 0.1 N,
- * 0.01 N m, 0.01 m/s^2, 0.1 rad/s^2 (DESIGN.md). Dividing by 10 or 100
+ * 0.01 N m, 0.01 m/s^2, 0.1 rad/s^2 (docs/INTERFACE.md). Dividing by 10 or 100
  * gives the double nearest the decimal value (98.1, not 98.10000000000001). */
 static const double fs_divisor[LOADID_JR3_NUM_GROUPS] = {10.0, 100.0, 100.0, 10.0};
 

@@ -28,7 +28,7 @@
 /* SocketCAN interface names hold at most IFNAMSIZ - 1 = 15 characters. */
 #define CAN_IFNAME_MAX 15
 /* base+4 (the full-scale frame) is the highest identifier of the JR3
- * group and must stay an 11-bit identifier (DESIGN.md, JR3 over CAN). */
+ * group and must stay an 11-bit identifier (docs/INTERFACE.md, JR3 over CAN). */
 #define CAN_BASE_ID_MAX (0x7FFu - 4u)
 
 /* The paper's load o1 (section V.A) [kg, kg m, kg m^2], as in
@@ -49,7 +49,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->can_base_id = 0x1A0;
     for (int i = 0; i < 3; ++i) {
         /* the paper's JR3 85M35A3-I40-D 200N12; accelerometer full scales
-         * are configuration values (DESIGN.md) */
+         * are configuration values (docs/INTERFACE.md) */
         cfg->jr3_fs_force[i] = 200.0;
         cfg->jr3_fs_moment[i] = 12.0;
         cfg->jr3_fs_linear[i] = 98.1;

@@ -1,6 +1,6 @@
 /*
- * loadidd: the load identification service (DESIGN.md "The command-line and
- * configuration contract").
+ * loadidd: the load identification service (docs/INTERFACE.md, "Command
+ * line" and "Configuration").
  *
  *   loadidd --config FILE --offline RECORDING_DIR [--result OUT.json]
  *           [--trace TRACE.csv [--publish-every N]]
@@ -191,7 +191,7 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
                 "alpha %.3g rad/s^2, omega %.3g rad/s\n",
                 prog, loadid_noise_source_name(l->channel_source), l->force, l->torque, l->spec,
                 l->alpha, l->omega);
-    /* Incomplete (DESIGN.md): no START or ZERO, the window cut short or
+    /* Incomplete (docs/INTERFACE.md): no START or ZERO, the window cut short or
      * without data; FAILED is always one of these. */
     char why[320] = "";
     if (!started)

@@ -1,9 +1,9 @@
 /*
  * The Modbus F/T sensor as an input of the daemon's event loop. libmodbus
- * blocks in select() up to its response timeout (STYLE.md rule 7), so one
+ * blocks in select() up to its response timeout, so one
  * thread of its own polls the sensor at modbus.rate_hz (drivers/
  * modbus_ft.h), stamps each sample with CLOCK_REALTIME microseconds at the
- * response (DESIGN.md's utime, the clock of the CAN and LCM inputs), and
+ * response (docs/INTERFACE.md's utime, the clock of the CAN and LCM inputs), and
  * hands it to the loop through a lock-free single-producer single-consumer
  * ring (C11 atomics, LOADID_MODBUS_INPUT_RING samples, allocated at start)
  * and an eventfd the loop puts in its epoll set.

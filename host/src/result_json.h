@@ -1,4 +1,4 @@
-/* The result file of loadidd --offline (DESIGN.md): a JSON array, one
+/* The result file of loadidd --offline (docs/INTERFACE.md): a JSON array, one
  * object per configured method. */
 #ifndef LOADID_RESULT_JSON_H
 #define LOADID_RESULT_JSON_H

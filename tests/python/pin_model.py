@@ -5,7 +5,7 @@ Conventions mapped here (each verified by a test in test_regressor_pinocchio.py)
 
 (a) Parameter order. Pinocchio's ``Inertia.toDynamicParameters()`` returns
         [m, mc_x, mc_y, mc_z, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]      (pin 4.1.0)
-    loadid's phi (eq. 5, DESIGN.md) is
+    loadid's phi (eq. 5, docs/INTERFACE.md) is
         [m, mc_x, mc_y, mc_z, Ixx, Ixy, Ixz, Iyy, Iyz, Izz].
     Both hold the inertia about the frame origin (I = I_C + m S(c)^T S(c)),
     so only Iyy and Ixz swap places: loadid index 6 (Ixz) is pin index 7 and

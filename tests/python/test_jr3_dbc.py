@@ -1,9 +1,9 @@
-"""The JR3 CAN layout three ways: DESIGN.md (written out here), proto/jr3.dbc
+"""The JR3 CAN layout three ways: docs/INTERFACE.md (written out here), proto/jr3.dbc
 (read by cantools) and the C encoder of drivers/ (through the helper
 program tests/tools/jr3_encode_log, whose path ctest passes in
 LOADID_JR3_ENCODE_LOG; it writes candump lines with drivers/' formatter).
 
-* the DBC says what DESIGN.md says: ids 0x1A0..0x1A4, DLC 8, three
+* the DBC says what docs/INTERFACE.md says: ids 0x1A0..0x1A4, DLC 8, three
   little-endian int16 at bits 0/16/32 with the default full scale / 16384,
   sequence in byte 6, status bits in byte 7, base+4 multiplexed by group with
   uint16 full scales in 0.1 N, 0.01 N m, 0.01 m/s^2, 0.1 rad/s^2;
@@ -31,7 +31,7 @@ REPO_ROOT = pathlib.Path(__file__).resolve().parents[2]
 DBC_PATH = REPO_ROOT / "proto" / "jr3.dbc"
 BASE = 0x1A0
 GROUPS = ["Force", "Moment", "Linear", "Angular"]
-# DESIGN.md: default full scales (N, N m, m/s^2, rad/s^2) and base+4 units.
+# docs/INTERFACE.md: default full scales (N, N m, m/s^2, rad/s^2) and base+4 units.
 FULL_SCALE = {"Force": 200.0, "Moment": 12.0, "Linear": 98.1, "Angular": 1000.0}
 FS_UNIT = {"Force": 0.1, "Moment": 0.01, "Linear": 0.01, "Angular": 0.1}
 UNIT_TEXT = {"Force": "N", "Moment": "N.m", "Linear": "m/s^2", "Angular": "rad/s^2"}

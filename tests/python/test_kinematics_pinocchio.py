@@ -18,7 +18,7 @@ Conventions mapped here, each explicitly:
 * pin.LOCAL gives a frame's velocity and acceleration in the frame's own axes;
   getFrameClassicalAcceleration's linear part is the classical acceleration
   of the frame origin (d2p/dt2), its angular part alpha = d(omega)/dt.
-* Gravity is given in base_link's frame ([0, 0, -9.81], DESIGN.md), so in S
+* Gravity is given in base_link's frame ([0, 0, -9.81], docs/INTERFACE.md), so in S
   it is R_bs^T g -- for track7 that is not the world's z.
 
 The negative controls at the end show that the 1e-9 comparison is sensitive:

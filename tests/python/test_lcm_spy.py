@@ -1,4 +1,4 @@
-"""lcm-spy decodes the project's LCM types (DESIGN.md): tools/spy/loadid-spy
+"""lcm-spy decodes the project's LCM types (docs/INTERFACE.md): tools/spy/loadid-spy
 starts lcm.spy.Spy with Debian's lcm.jar, jchart2d and the build's
 loadid_lcmtypes.jar under Xvfb, in a private network namespace, while
 estimate_t messages are published; it must report the project's 6 types,

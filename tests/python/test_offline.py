@@ -1,4 +1,4 @@
-"""loadidd --offline (DESIGN.md): the pipeline over simulated recordings.
+"""loadidd --offline (docs/INTERFACE.md): the pipeline over simulated recordings.
 
 The truth is what loadid-sim put in (truth.yaml: the load's phi, offsets);
 the usable samples of a damaged recording are counted independently with

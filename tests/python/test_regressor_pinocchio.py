@@ -55,7 +55,7 @@ def test_pinocchio_parameter_order():
     I_C = np.array([[1.0, 0.01, 0.02],
                     [0.01, 2.0, 0.03],
                     [0.02, 0.03, 3.0]])
-    # Parallel-axis theorem (DESIGN.md): I_S = I_C + m (c.c E - c c^T).
+    # Parallel-axis theorem (docs/INTERFACE.md): I_S = I_C + m (c.c E - c c^T).
     I_S = I_C + m * (c @ c * np.eye(3) - np.outer(c, c))
     pin_params = np.asarray(pin.Inertia(m, c, I_C).toDynamicParameters())
     expected_pin = [m, *(m * c), I_S[0, 0], I_S[0, 1], I_S[1, 1], I_S[0, 2], I_S[1, 2], I_S[2, 2]]
@@ -141,7 +141,7 @@ def test_skipping_the_acceleration_conversion_mismatches():
 
 
 def test_regressor_at_rest_reads_weight_upwards():
-    """DESIGN.md: a load hanging still with z of S up reads f_z = +m 9.81;
+    """docs/INTERFACE.md: a load hanging still with z of S up reads f_z = +m 9.81;
     Pinocchio agrees when its acceleration is spec = a - g = [0 0 +9.81]."""
     load = pin.Inertia(1.7, np.array([0.02, -0.01, 0.05]), np.diag([0.01, 0.02, 0.03]))
     spec = np.array([0.0, 0.0, G])

@@ -1,5 +1,5 @@
 /*
- * lcm_encode_samples: one fixed instance of each LCM type of DESIGN.md,
+ * lcm_encode_samples: one fixed instance of each LCM type of docs/INTERFACE.md,
  * encoded by the lcm-gen C code, for the Python cross-check
  * (tests/python/test_lcm_types.py builds the same instances with the
  * lcm-gen Python code and compares bytes). Prints, one a line:

@@ -2,7 +2,7 @@
  * Unit tests of the configuration loader (loadid/config.h) and of the YAML
  * tree under it (host/src/yaml_tree.h).
  *
- * The expected defaults are written here literally, from DESIGN.md and
+ * The expected defaults are written here literally, from docs/INTERFACE.md and
  * config.h, not taken from loadid_config_default: the shipped example
  * host/config/loadid.yaml, the function and this list must agree. Every
  * error is checked with its full "FILE:LINE: KEY: what" prefix, line
@@ -148,7 +148,7 @@ static void assert_doubles(const double *a, const double *expected, int n, const
         }                                                                                        \
     } while (0)
 
-/* DESIGN.md's and config.h's defaults, written out. */
+/* docs/INTERFACE.md's and config.h's defaults, written out. */
 static void assert_defaults(const loadid_config_t *c) {
     assert_string_equal(c->robot_urdf, SHIPPED_URDF);
     assert_string_equal(c->robot_base_link, "base_link");

@@ -1,9 +1,9 @@
 /*
- * Unit tests of loadid/jr3.h: the JR3 CAN layout of DESIGN.md ("JR3 over
+ * Unit tests of loadid/jr3.h: the JR3 CAN layout of docs/INTERFACE.md ("JR3 over
  * CAN") as byte vectors.
  *
  * Independent references: frames written out byte by byte in this file from
- * DESIGN.md's table (little-endian int16 counts, byte 6 sequence, byte 7
+ * docs/INTERFACE.md's table (little-endian int16 counts, byte 6 sequence, byte 7
  * status; base+4 with uint16 units of 0.1 N, 0.01 N m, 0.01 m/s^2,
  * 0.1 rad/s^2), SI values computed by hand as decimal literals (all exact
  * in binary: counts * full_scale / 16384 with the default full scales),

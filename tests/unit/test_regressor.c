@@ -200,7 +200,7 @@ static void test_regressor_columns_are_unit_wrenches(void **state) {
 }
 
 /* A state at rest: with z of S up, a - g = [0 0 +9.81] and the load reads
- * f = [0 0 m 9.81], tau = (m c) x (a - g) (DESIGN.md sign convention). */
+ * f = [0 0 m 9.81], tau = (m c) x (a - g) (docs/INTERFACE.md sign convention). */
 static void test_regressor_static_load_z_up(void **state) {
     (void)state;
     const double spec[3] = {0.0, 0.0, G_NORM}, zero[3] = {0.0, 0.0, 0.0};

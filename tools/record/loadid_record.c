@@ -1,6 +1,6 @@
 /*
  * loadid-record: records a live session into a recording folder of the
- * DESIGN.md format, the input of `loadidd --offline` and `loadid-replay`:
+ * docs/INTERFACE.md format, the input of `loadidd --offline` and `loadid-replay`:
  *
  *   can.log  the JR3's frames (base..base+4, standard identifiers) from a
  *            SocketCAN interface, one candump line each, with the kernel's
@@ -12,7 +12,7 @@
  *            receive time.
  *
  * Both times are wall-clock microseconds (SO_TIMESTAMP and LCM's
- * recv_utime), the one clock of DESIGN.md. Stops on SIGINT or SIGTERM, or
+ * recv_utime), the one clock of docs/INTERFACE.md. Stops on SIGINT or SIGTERM, or
  * after --duration seconds, and prints what it recorded, with the frames
  * the kernel dropped when the recorder fell behind (SO_RXQ_OVFL). An
  * interface that vanishes is reported and reopened once a second, as the
@@ -45,7 +45,7 @@ static volatile sig_atomic_t stop_requested;
 
 static void on_signal(int sig) {
     (void)sig;
-    stop_requested = 1; /* only a flag (STYLE.md 13) */
+    stop_requested = 1; /* only a flag */
 }
 
 static void usage(FILE *out) {

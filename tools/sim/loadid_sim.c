@@ -1,5 +1,5 @@
 /*
- * loadid-sim: simulates a recording (DESIGN.md "A recording is a folder")
+ * loadid-sim: simulates a recording (docs/INTERFACE.md "Recordings")
  * of the configured robot following an excitation trajectory from
  * loadid-traj with a load on its wrist sensor:
  *   - the joints follow the setpoints through a second-order servo with

@@ -1,5 +1,5 @@
 /*
- * Writes a recording folder (DESIGN.md "A recording is a folder"):
+ * Writes a recording folder (docs/INTERFACE.md "Recordings"):
  * can.log in the candump format of can-utils and lcm.log as an LCM event
  * log (lcm-logger's format, through liblcm's eventlog API), with the
  * channels LOADID_JOINTS (joint_state_t) and LOADID_COMMAND (command_t).

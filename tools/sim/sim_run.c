@@ -232,7 +232,7 @@ static int write_truth(const sim_t *s, const char *dir, const char *traj_path,
     FILE *f = fopen(path, "w");
     if (!f) return -errno;
     const loadid_config_t *c = &s->cfg;
-    fprintf(f, "# What loadid-sim simulated (DESIGN.md recording format).\n");
+    fprintf(f, "# What loadid-sim simulated (docs/INTERFACE.md recording format).\n");
     fprintf(f, "format: loadid-truth-1\nseed: %llu\nload_name: \"%s\"\n", (unsigned long long)seed,
             load_name);
     loadid_real_t phi[10];

@@ -1,7 +1,7 @@
 /*
  * The simulator of loadid-sim as a library: the robot following an
  * excitation trajectory with a load on its wrist sensor, written as a
- * recording folder (DESIGN.md):
+ * recording folder (docs/INTERFACE.md):
  *   - the joints follow the setpoints through a second-order servo with
  *     backlash (servo.h), so encoder positions differ from setpoints and the
  *     load's real motion from both;

@@ -1,6 +1,6 @@
 /*
  * loadid drivers: the candump log format of can-utils (`candump -l`,
- * `canplayer -I`), one classic CAN frame a line (DESIGN.md, recordings):
+ * `canplayer -I`), one classic CAN frame a line (docs/INTERFACE.md, recordings):
  *
  *   (1700000000.123456) vcan0 1A0#0102030405060708
  *
@@ -15,7 +15,7 @@
  * Not classic CAN data frames, so refused with their own codes: CAN FD
  * (`123##1...`, also CAN XL `###`) and remote frames (`123#R`, `123#R4`).
  *
- * Return convention (STYLE.md): 0 or a count on success, a negated errno
+ * Return convention (loadid/error_text.h): 0 or a count on success, a negated errno
  * or a LOADID_CANDUMP_E_* code (all below -1000) otherwise;
  * loadid_candump_strerror() names each.
  */

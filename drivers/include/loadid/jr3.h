@@ -1,6 +1,6 @@
 /*
  * loadid drivers: the JR3 force-torque sensor (with accelerometer) on CAN,
- * the layout of DESIGN.md "JR3 over CAN" (proto/jr3.dbc describes the same).
+ * the layout of docs/INTERFACE.md "JR3 over CAN" (proto/jr3.dbc describes the same).
  * Pure code: no I/O, no clock; frames in, samples out.
  *
  * Classic CAN 2.0A, 11-bit identifiers, DLC 8. One sample is four frames
@@ -27,7 +27,7 @@
  *   - the decoder (the daemon's side): a state machine fed one frame at a
  *     time that assembles samples and counts everything status_t reports.
  *
- * Return convention (STYLE.md): 0 or a positive result code on success, a
+ * Return convention (loadid/error_text.h): 0 or a positive result code on success, a
  * negated errno or a LOADID_JR3_E_* code (all below -1000) otherwise;
  * loadid_jr3_strerror() names each.
  */
@@ -133,7 +133,7 @@ typedef struct {
     loadid_jr3_full_scale_change_t full_scale;
 } loadid_jr3_output_t;
 
-/* Counters since create or reset. status_t (DESIGN.md) takes samples_ok,
+/* Counters since create or reset. status_t (docs/INTERFACE.md) takes samples_ok,
  * frames_bad, samples_incomplete, samples_saturated and sequence_gaps
  * directly. Invariants (checked by the tests):
  *   frames_total = frames_bad + frames_sample + frames_duplicate

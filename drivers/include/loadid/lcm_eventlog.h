@@ -24,7 +24,7 @@
  * The file must be seekable (a regular file, or fmemopen() for a fuzz
  * harness or a test): the reader looks ahead and goes back.
  *
- * Return convention (STYLE.md): 0 or a count on success, a negated errno
+ * Return convention (loadid/error_text.h): 0 or a count on success, a negated errno
  * or a LOADID_EVENTLOG_E_* code otherwise; loadid_eventlog_strerror()
  * names each.
  */

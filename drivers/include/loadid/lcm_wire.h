@@ -1,5 +1,5 @@
 /*
- * The six LCM types of DESIGN.md (proto/<type>.lcm, package loadid) on the
+ * The six LCM types of docs/INTERFACE.md (proto/<type>.lcm, package loadid) on the
  * wire, hand-written on fixed buffers: encode into a caller's buffer,
  * decode a received buffer into fixed-size structs. Nothing here allocates
  * (the loop of loadidd uses these instead of lcm-gen's C, whose *_publish

@@ -18,7 +18,7 @@
  *     read, close, reopen after the device vanished), which counts every
  *     transport fault and uses the decoder.
  *
- * Return convention (STYLE.md): 0 or a positive result code on success, a
+ * Return convention (loadid/error_text.h): 0 or a positive result code on success, a
  * negated errno or a LOADID_MODBUS_FT_E_* code (all below -1200) otherwise;
  * loadid_modbus_ft_strerror() names each.
  */

@@ -1,5 +1,5 @@
 /*
- * Reads a recording folder (DESIGN.md): can.log (candump format) and
+ * Reads a recording folder (docs/INTERFACE.md): can.log (candump format) and
  * lcm.log (an LCM event log) merged into one stream of events in time
  * order, as they would have arrived live. Used by the offline pipeline and
  * the analysis tools. Allocates at open; reading is sequential.

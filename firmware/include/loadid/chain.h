@@ -1,7 +1,7 @@
 /*
  * A serial kinematic chain from the base frame to the sensor frame S, as
  * plain data: what a URDF says about the movable joints between
- * robot.base_link and robot.sensor_link (DESIGN.md), with every fixed joint
+ * robot.base_link and robot.sensor_link (docs/INTERFACE.md), with every fixed joint
  * folded into the next transform. loadid/urdf.h fills it from a URDF file;
  * tests may fill it by hand. Doubles throughout: it is configuration, read
  * once, whatever scalar the core computes in.

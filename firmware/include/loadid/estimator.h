@@ -31,7 +31,7 @@
 extern "C" {
 #endif
 
-/* The values match estimate_t's constants in proto/ (DESIGN.md). */
+/* The values match estimate_t's constants in proto/ (docs/INTERFACE.md). */
 typedef enum {
     LOADID_METHOD_RLS = 1,
     LOADID_METHOD_RIV = 2,

@@ -33,7 +33,7 @@ typedef struct {
 typedef struct loadid_kin loadid_kin_t; /* opaque */
 
 /* Builds the kinematics of a chain (copied; loadid_chain_check must pass)
- * with gravity given in the base frame [m/s^2] (DESIGN.md default
+ * with gravity given in the base frame [m/s^2] (docs/INTERFACE.md default
  * [0 0 -9.81]). The only allocation. Returns 0, -EINVAL (NULL pointer, a
  * chain that fails the check, gravity not finite) or -ENOMEM. */
 int loadid_kin_create(const loadid_chain_t *chain, const double gravity[3],

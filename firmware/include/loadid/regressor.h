@@ -2,7 +2,7 @@
  * The data matrix A of eq. (6): the wrench a rigid load exerts on the sensor
  * is linear in its ten inertial parameters, [f; tau] = A(a-g, w, alpha) phi.
  *
- * Conventions (DESIGN.md): all vectors in the sensor frame S;
+ * Conventions (docs/INTERFACE.md): all vectors in the sensor frame S;
  *   spec = a - g, the specific force of the origin of S (what an
  *          accelerometer at that point reads; [0 0 +9.81] at rest, z up);
  *   phi  = [m, m cx, m cy, m cz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz], the inertia

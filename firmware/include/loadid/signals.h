@@ -57,7 +57,7 @@ typedef struct {
 } loadid_regressor_input_t;
 
 typedef struct {
-    loadid_signal_source_t source;    /* default MIXED (DESIGN.md) */
+    loadid_signal_source_t source;    /* default MIXED (docs/INTERFACE.md) */
     loadid_jf_config_t measured;      /* filter of the encoder positions */
     loadid_jf_config_t setpoint;      /* filter of the commanded positions */
     /* A sensor sample further than this from the newest joint state [us]

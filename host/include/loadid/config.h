@@ -1,7 +1,7 @@
 /*
- * The configuration file (DESIGN.md, "The command-line and configuration
- * contract"): one YAML file, read with libyaml into loadid_config_t. The
- * keys of DESIGN.md are fixed; the sections marked "loadid" below are this
+ * The configuration file (docs/INTERFACE.md, "Configuration"): one YAML
+ * file, read with libyaml into loadid_config_t. The keys of
+ * docs/INTERFACE.md are fixed; the sections marked "loadid" below are this
  * project's additions. Keys left out take the defaults given here. Relative
  * paths are relative to the directory of the configuration file.
  *
@@ -18,7 +18,7 @@
  * through the warning callback, "cfg.yaml:50: dashboard: not a loadid
  * section, ignored".
  *
- * Where DESIGN.md is silent:
+ * Where docs/INTERFACE.md is silent:
  *   - An empty file (or one with only comments) gives every default, with a
  *     warning "FILE:1: (top level): empty configuration, ...". A section
  *     with no keys ("robot:" alone, or with every key commented out) is the
@@ -26,7 +26,7 @@
  *   - Numbers are plain YAML numbers (integers accepted where a real is
  *     expected); .nan and .inf are refused; a quoted "1.5" is a string.
  *     Integers may be hexadecimal (base_id: 0x1A0, seeds).
- *   - Method and source names are case-sensitive, as DESIGN.md spells them.
+ *   - Method and source names are case-sensitive, as docs/INTERFACE.md spells them.
  *   - robot.urdf is made absolute (a relative config path is taken against
  *     the working directory at load), so it survives a chdir; it is not
  *     checked for existence here (the URDF reader reports that, after
@@ -54,7 +54,7 @@ extern "C" {
 enum { LOADID_SENSOR_JR3 = 0, LOADID_SENSOR_MODBUS = 1 };
 
 typedef struct {
-    /* robot: (DESIGN.md) */
+    /* robot: (docs/INTERFACE.md) */
     char robot_urdf[LOADID_PATH_MAX];   /* resolved path; default: the shipped
                                            host/config/robots/rx60.urdf */
     char robot_urdf_origin[LOADID_PATH_MAX + 32]; /* where robot_urdf was set, for

@@ -38,7 +38,7 @@
 extern "C" {
 #endif
 
-/* States, the values of estimate_t's constants (DESIGN.md). */
+/* States, the values of estimate_t's constants (docs/INTERFACE.md). */
 enum {
     LOADID_STATE_IDLE = 0,
     LOADID_STATE_ZEROING = 1,

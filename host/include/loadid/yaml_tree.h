@@ -30,7 +30,7 @@
  * Numbers are converted with strtod/strtoll, which follow LC_NUMERIC: the
  * programs keep the "C" locale (they never call setlocale).
  *
- * Return convention (STYLE.md): 0 or a count on success, a negative errno on
+ * Return convention (loadid/error_text.h): 0 or a count on success, a negative errno on
  * failure. The loadid_yaml_get_* getters return 1 when the key is present
  * and *out was written, 0 when it is absent (or map is NULL: an absent
  * section), and -EINVAL when it is present but wrong, with the message in
