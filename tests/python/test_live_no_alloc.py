@@ -18,12 +18,10 @@ allocator), as test_no_alloc.
 from __future__ import annotations
 
 import os
-import re
-import shutil
-import subprocess
 
 import pytest
 
+from alloc_report import counts, loop_sites
 from recordings import program
 from test_live_lcm import live_config, run_session
 from test_live_modbus import run_modbus_session
@@ -63,11 +61,6 @@ def modbus_session(recording, tmp_path_factory):
     return counted(d, lambda: run_modbus_session(recording, d))
 
 
-def counts(report: str) -> dict:
-    return {k: int(v) for k, v in (l.split()[:2] for l in report.splitlines()
-                                   if not l.startswith("site"))}
-
-
 def test_session_went_through_every_path(session):
     """What the window covered: the daemon ran the whole session."""
     assert session["returncode"] == 0, session["stderr"]
@@ -84,26 +77,9 @@ def test_session_went_through_every_path(session):
     assert session["reencoded_differ"] == 0
 
 
-def resolve(site: str) -> str:
-    """loadidd's frames as function (file:line), by addr2line (the
-    preloaded library's dladdr sees only exported symbols)."""
-    exe = program("LOADIDD_EXE")
-
-    def one(m):
-        if not shutil.which("addr2line"):
-            return m.group(0)
-        r = subprocess.run(["addr2line", "-f", "-i", "-s", "-e", exe, m.group(1)],
-                           capture_output=True, text=True)
-        lines = r.stdout.split()
-        return " < ".join(f"{f} ({w})" for f, w in zip(lines[::2], lines[1::2])) or m.group(0)
-
-    return re.sub(r"loadidd\+(0x[0-9a-f]+)\(\?\)", one, site)
-
-
 def assert_no_loop_allocation(session):
     c = counts(session["report"])
-    sites = [resolve(l) for l in session["report"].splitlines()
-             if l.startswith("site") and not l.startswith("site loop 0 ")]
+    sites = loop_sites(session["report"], program("LOADIDD_EXE"))
     assert c["loop_allocations"] == 0, "allocations in the loop:\n" + "\n".join(sites)
 
 

@@ -1,15 +1,19 @@
 """loadidd on a real SocketCAN interface: a Debian kernel booted under qemu
-(TCG) with vcan (tests/vm/run_vcan_vm.sh; DESIGN.md "How the real parts start
-in tests"). Inside the VM canplayer puts the simulated recording's can.log
-on vcan0 (candump counts every line), then loadid-replay puts the recording
-on vcan0 and LCM while loadidd runs live on both; its saved RTLS estimate of
-the paper's o1 must match the truth. loadid-record records a second replay;
-`loadidd --offline` on the recorded folder (here, after the VM) must match
-the truth within the same bounds, and its can.log must hold the original's
-frames in order.
+(TCG) with vcan (tests/vm/run_vcan_vm.sh; docs/ARCHITECTURE.md). Inside the
+VM canplayer puts the simulated recording's can.log on vcan0 (candump counts
+every line), then loadid-replay puts the recording on vcan0 and LCM while
+loadidd runs live on both, with the allocation counter preloaded (tests/
+support/alloc_count.c): no allocation between its first and last
+epoll_wait. Every method's final estimate of the paper's o1 (estimate_t, and
+the saved one) must find the truth within bounds derived from 20 seeds
+offline (mass, COM, principal moments about the COM). loadid-record records
+beside the daemon what it receives: `loadidd --offline` on that recording
+(here, after the VM) must count the same and give every final estimate to
+1e-9, its can.log must hold the original's frames in order, no frame later
+than the bounds' survey assumed.
 
 Then fault injection (tests/vm/fault_session.py): hand-made frames of every
-kind DESIGN.md names, with a still robot's joint states on LCM and `loadid
+kind docs/INTERFACE.md names, with a still robot's joint states on LCM and `loadid
 zero`, `start`, `stop` between the parts, one part beside a flood of foreign
 identifiers at the full bus rate; status_t (read by `loadid status`) must
 count exactly what was sent, every estimator must have been fed exactly the
@@ -44,12 +48,15 @@ import subprocess
 import sys
 import select
 import signal
+import struct
 import tarfile
 import time
 
 import numpy as np
 import pytest
 
+from accuracy import BOUNDS, VCAN_LAG_US, assert_accuracy
+from alloc_report import counts, loop_sites
 from recordings import program, read_truth
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -75,7 +82,8 @@ def vm(recording):
                   work, program("LOADIDD_EXE"),
                   program("LOADID_REPLAY_EXE"), str(recording), URDF,
                   program("LOADID_CLI_EXE"), program("LOADID_RECORD_EXE"),
-                  program("LOADID_ESTIMATE_WATCH"), faults, program("LOADID_CAN_FLOOD")], work)
+                  program("LOADID_ESTIMATE_WATCH"), faults, program("LOADID_CAN_FLOOD"),
+                  program("LOADID_ALLOC_COUNT_LIB")], work)
     run.update(expected=expected, samples=samples, work=work)
     print(f"VM boot {run['boot_s']:.1f} s here, {run['run_s']:.1f} s after it "
           f"(deadline {run['deadline_s']:.0f} s); in the VM's time: {run['guest_boot']}")
@@ -90,7 +98,8 @@ def vm(recording):
 # shows (its wall time grows with the host's load, as the whole run's
 # does); the rest of the run is given RUN_BOOTS boots: here it took about
 # BOOTS_SEEN of them, idle or loaded (3.3 to 4.4 since the CAN faults,
-# 39.7 s of the VM's own time; 2.5 before them).
+# 39.7 s of the VM's own time, 35 s since the recorder runs beside the
+# live daemon; 2.5 before them).
 PREPARE_S = 600
 BOOT_MAX_S = 300
 BOOTS_SEEN = 5
@@ -221,23 +230,136 @@ def test_canplayer_puts_every_line_on_vcan(vm):
     assert int(m.group(1)) == int(m.group(2)) > 10000, m.group(0)
 
 
-def test_live_estimate_on_vcan_matches_the_truth(vm, recording):
+METHODS = {1: "RLS", 2: "RIV", 3: "RTLS", 6: "REFINED"}
+WINDOW_SAMPLES = 1500  # estimation.duration_s 1.5 at the JR3's 1 kHz
+
+
+def live_finals(vm) -> dict:
+    """The live daemon's final estimate_t per method (estimate_watch's
+    lines): {name: {"samples": n, "phi": [10]}}."""
+    text = block(vm, "LIVE-ESTIMATES")
+    out = {}
+    for m, state, n, phi in re.findall(r"^LOADID-ESTIMATE method (\d+) state (\d+) samples (\d+) "
+                                       r"phi (.*)$", text, re.M):
+        check(vm, state == "3", f"a final estimate_t that is not DONE: method {m} state {state}")
+        out[METHODS[int(m)]] = dict(samples=int(n), phi=[float(x) for x in phi.split()])
+    return out
+
+
+def summary(text: str) -> dict:
+    """loadidd's --verbose summary ('samples ok N, used N, ...') as
+    {name: count}; the first in TEXT."""
+    m = re.search(r"^loadidd: (samples ok \d+, used \d+, .*)$", text, re.M)
+    assert m, text
+    return {k: int(v) for k, v in re.findall(r"([a-zA-Z][a-zA-Z ]*?) (\d+)(?:,|$)", m.group(1))}
+
+
+def saved_result(vm) -> dict:
+    """The method and phi of the estimate the live daemon saved."""
     result = block(vm, "RESULT")
-    assert re.search(r"^method: RTLS\s*$", result, re.M), result
-    samples = int(re.search(r"^samples: (\d+)", result, re.M).group(1))
-    mass = float(re.search(r"^mass: (\S+)", result, re.M).group(1))
-    com = json.loads(re.search(r"^com: (\[.*\])", result, re.M).group(1))
-    truth = read_truth(recording)
-    phi = np.array(json.loads(truth["load.phi"]))
-    stats = re.search(r"^loadidd: samples ok (\d+), used (\d+), frames bad (\d+).*$", vm["out"],
-                      re.M)
-    check(vm, stats, "no statistics line from loadidd --verbose")
-    # Emulation refuses some samples as stale (joint states late); at
-    # least 200 of the window's 1500 must be in.
-    check(vm, samples >= 200, f"RTLS used {samples} samples (< 200): {stats.group(0)}")
-    assert abs(mass - phi[0]) <= 0.05 * phi[0], mass
-    np.testing.assert_allclose(com, phi[1:4] / phi[0], atol=5e-3)
-    assert int(stats.group(3)) == 0 and int(stats.group(1)) >= 3000, stats.group(0)
+    method = re.search(r"^method: (\w+)\s*$", result, re.M)
+    phi = re.search(r"^phi: (\[.*\])", result, re.M)
+    samples = re.search(r"^samples: (\d+)", result, re.M)
+    assert method and phi and samples, result
+    return dict(method=method.group(1), phi=json.loads(phi.group(1)), samples=int(samples.group(1)))
+
+
+# The live estimates' accuracy bounds: BOUNDS["vcan"] (accuracy.py), 2.5
+# times the worst of 20 seeds (mass 0.48 %, COM 0.37 mm, principal moment
+# 4.2 %) of the scenario the VM runs, measured offline by
+# tests/tools/error_survey.py --scenario vcan. The VM replays the `recording`
+# fixture (the default simulation and seed) in real time, every frame and
+# joint state arriving (counted here and below), so the daemon sees the
+# offline tests' default scenario (BOUNDS["default"]) but for the JR3
+# frames' time stamps: the kernel's receive times, later than the replay's
+# schedule, which the joint states' utimes keep (test_frames_arrive_as_late_
+# as_the_bounds_assume). The survey delays every frame by VCAN_LAG_US; that
+# moves its worst moment error from 4.0 to 4.2 %, hence 10.6 % here, not
+# the default's 10.
+def test_live_estimate_on_vcan_matches_the_truth(vm, recording):
+    finals = live_finals(vm)
+    check(vm, sorted(finals) == sorted(METHODS.values()),
+          f"final estimates of {sorted(finals)}, not of every configured method")
+    stats = summary(vm["out"])
+    # Every sample of the window reached every method: the conditions of
+    # the survey behind the bounds (a VM falling behind the replay would
+    # refuse samples as stale, and its estimate would be worse).
+    assert stats["stale"] == 0 and stats["frames bad"] == 0 and stats["gaps"] == 0, stats
+    assert all(f["samples"] == WINDOW_SAMPLES for f in finals.values()), finals
+    truth = np.array(json.loads(read_truth(recording)["load.phi"]))
+    for name, f in sorted(finals.items()):
+        e = assert_accuracy(f["phi"], truth, **BOUNDS["vcan"])
+        print(f"live on vcan0, {name}: mass {e['mass_pct']:.3f} %, COM {e['com_mm']:.3f} mm, "
+              f"principal moments about the COM {np.round(e['moments_pct'], 2).tolist()} % "
+              f"(bounds {BOUNDS['vcan']})")
+    # The saved estimate is the primary method's final one (REFINED: every
+    # group identified, and ties go to it), to its last bit.
+    saved = saved_result(vm)
+    assert saved["method"] == "REFINED" and saved["samples"] == WINDOW_SAMPLES, saved
+    np.testing.assert_allclose(saved["phi"], finals["REFINED"]["phi"], rtol=1e-15, atol=0)
+
+
+def test_no_allocation_in_the_live_loop_on_socketcan(vm):
+    """The daemon's loop allocates nothing after start-up on a real
+    SocketCAN interface: the allocation counter (tests/support/
+    alloc_count.c, as in test_live_no_alloc.py) preloaded into the live
+    daemon counts every allocation in every thread between its first
+    epoll_wait and the return of its last (SIGTERM): the whole session on
+    vcan0 and LCM, ZERO, estimation, DONE, REFINED on the worker thread,
+    the saved estimate."""
+    check(vm, "LOADID-LIVE-EXIT 0" in vm["out"], "the live daemon did not exit with 0")
+    report = block(vm, "ALLOC")
+    c = counts(report)
+    check(vm, {"loop_allocations", "epoll_waits"} <= set(c), f"no counts in the report:\n{report}")
+    # About one wait per joint state and per batch of frames: the loop ran
+    # the whole session inside the window; and the counter counts in the
+    # VM (the shutdown frees what start-up allocated).
+    assert c["epoll_waits"] > 3000 and c["shutdown_allocations"] > 0, report
+    sites = loop_sites(report, program("LOADIDD_EXE"))
+    assert c["loop_allocations"] == 0, "allocations in the loop:\n" + "\n".join(sites)
+    print(f"live on vcan0 with the allocation counter: {c['loop_allocations']} allocations in "
+          f"{c['epoll_waits']} epoll_waits, {c.get('shutdown_allocations')} at shutdown")
+
+
+def test_live_estimates_equal_offline_on_the_frames_received(vm, recorded, tmp_path):
+    """loadid-record ran beside the live daemon, so its recording holds
+    the frames and joint states the daemon received, with the same time
+    stamps (the kernel's receive time; the joint states' utimes); `loadidd
+    --offline` on it, with the VM's configuration, must count the same and
+    give every method's final estimate to 1e-9."""
+    live = summary(vm["out"])
+    rec = re.search(r"^loadid-record: (\d+) CAN frames, (\d+) LCM events; .* (\d+) frames "
+                    r"dropped by the kernel$", vm["out"], re.M)
+    check(vm, rec, "no summary from loadid-record")
+    frames, _, rec_drops = map(int, rec.groups())
+    # Nothing lost on either socket (the recorder has every frame the
+    # replay sent): the recording is what the daemon read.
+    assert rec_drops == 0 and live["CAN drops"] == 0, (rec.group(0), live)
+    assert frames == len(can_frames(os.path.join(recorded, "can.log"))) == \
+        len(can_frames(os.path.join(vm["work"], "root", "data", "can.log"))), frames
+    cfg = tmp_path / "vm.yaml"
+    vm_cfg = open(os.path.join(vm["work"], "root", "data", "loadid.yaml")).read()
+    cfg.write_text(re.sub(r"^results:\n(  .*\n)+", "", vm_cfg, flags=re.M)
+                   .replace("urdf: robot.urdf", f"urdf: {URDF}"))
+    assert "results" not in cfg.read_text() and URDF in cfg.read_text()
+    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(cfg), "--offline", recorded,
+                        "--verbose"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    off = summary(r.stderr)
+    # Offline's counts (the pipeline's) are the live daemon's, one by one.
+    assert len(off) == 9 and {k: live.get(k) for k in off} == off, (off, live)
+    offline = {o["method"]: o for o in json.loads(r.stdout)}
+    finals = live_finals(vm)
+    assert sorted(offline) == sorted(finals), (sorted(offline), sorted(finals))
+    worst = 0.0
+    for name, f in finals.items():
+        o = offline[name]
+        assert f["samples"] == o["samples"], (name, f["samples"], o["samples"])
+        np.testing.assert_allclose(f["phi"], o["phi"], rtol=1e-9, atol=1e-12, err_msg=name)
+        worst = max(worst, float(np.max(np.abs(np.subtract(f["phi"], o["phi"])) /
+                                     np.maximum(np.abs(o["phi"]), 1e-300))))
+    print(f"live on vcan0 = offline on the {frames} frames and {rec.group(2)} LCM events it "
+          f"received: {', '.join(sorted(finals))}, largest relative difference of phi {worst:.1e}")
 
 
 # ---------------------------------------------------------------- loadid-record
@@ -293,6 +415,47 @@ def can_frames(path):
     return frames
 
 
+def lcm_utimes(path, channel, action=None):
+    """The utime (the first field) of every CHANNEL message in an LCM log;
+    of commands, only those of ACTION (the field after it)."""
+    import lcm
+    return [struct.unpack(">q", ev.data[8:16])[0] for ev in lcm.EventLog(path, "r")
+            if ev.channel == channel and (action is None or ev.data[16] == action)]
+
+
+def test_frames_arrive_as_late_as_the_bounds_assume(recorded, recording):
+    """How late the JR3 frames reached the sockets in the VM: each frame's
+    receive time in the recording loadid-record made beside the daemon, less
+    its time in the original and the replay's shift (that of the joint
+    states' utimes, which loadid-replay moves all alike). BOUNDS["vcan"] come
+    from a survey with every frame VCAN_LAG_US late: in the estimation
+    window 99 % of them must be no later, and none a sample period (1 ms)
+    late. The few later ones come when the daemon's own work takes the VM's
+    one CPU from loadid-replay (seen: 22 of the window's 6000 frames, up to
+    0.58 ms, 50 ms after START; and 2.5 ms at DONE, REFINED on the worker,
+    after the window). Setting those 22 to the median moved the estimates
+    by at most 0.001 % of the mass, 0.0004 mm and 0.004 % of a principal
+    moment (once, by hand): nothing next to the bounds' margin."""
+    utimes = [lcm_utimes(os.path.join(path, "lcm.log"), "LOADID_JOINTS")
+              for path in (str(recording), recorded)]
+    shifts = {b - a for a, b in zip(*utimes)}
+    assert len(utimes[0]) == len(utimes[1]) and len(shifts) == 1, (len(utimes[0]), shifts)
+    got = np.array([t for t, _, _ in can_frames(os.path.join(recorded, "can.log"))])
+    want = np.array([t for t, _, _ in can_frames(os.path.join(str(recording), "can.log"))])
+    assert len(got) == len(want)
+    lag = got - want - shifts.pop()
+    (start,) = lcm_utimes(os.path.join(str(recording), "lcm.log"), "LOADID_COMMAND", action=2)
+    window = (want >= start) & (want <= start + WINDOW_SAMPLES * 1000)
+    w = lag[window]
+    p50, p99 = np.percentile(w, 50), np.percentile(w, 99)
+    print(f"JR3 frames received after the replay's schedule, in the estimation window: min "
+          f"{w.min()} us, median {p50:.0f} us, p99 {p99:.0f} us, max {w.max()} us, "
+          f"{np.sum(w > VCAN_LAG_US)} of {w.size} later than the bounds' survey's "
+          f"{VCAN_LAG_US} us; outside it max {lag[~window].max()} us")
+    assert w.size >= 4 * WINDOW_SAMPLES, w.size
+    assert w.min() >= 0 and p99 <= VCAN_LAG_US and w.max() < 1000, (w.min(), p99, w.max())
+
+
 def test_recorded_can_log_holds_the_original_frames(recorded, recording):
     got = can_frames(os.path.join(recorded, "can.log"))
     want = can_frames(os.path.join(str(recording), "can.log"))
@@ -319,22 +482,6 @@ def test_recorded_lcm_log_holds_the_joints_and_commands(recorded, recording):
     assert got.count("LOADID_JOINTS") <= want.count("LOADID_JOINTS")
     assert want.count("LOADID_JOINTS") > 1000
     assert set(got) == {"LOADID_JOINTS", "LOADID_COMMAND"}  # not LOADID_STATUS etc.
-
-
-def test_offline_estimate_of_the_recorded_session_matches_the_truth(recorded, recording,
-                                                                    tmp_path):
-    cfg = tmp_path / "c.yaml"
-    cfg.write_text(f"robot:\n  urdf: {URDF}\nkalman:\n  max_joint_age_s: 0.02\n")
-    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(cfg), "--offline", recorded],
-                       capture_output=True, text=True, timeout=300)
-    assert r.returncode == 0, r.stderr
-    rtls = next(e for e in json.loads(r.stdout) if e["method"] == "RTLS")
-    phi = np.array(json.loads(read_truth(recording)["load.phi"]))
-    print("recorded session, offline RTLS:", rtls["samples"], "samples, mass", rtls["mass"],
-          "truth", phi[0], "com", rtls["com"], "truth", phi[1:4] / phi[0])
-    assert rtls["samples"] >= 200
-    assert abs(rtls["mass"] - phi[0]) <= 0.05 * phi[0], rtls["mass"]
-    np.testing.assert_allclose(rtls["com"], phi[1:4] / phi[0], atol=5e-3)
 
 
 # ------------------------------------------------------------- fault injection
@@ -366,7 +513,7 @@ def final_estimates(text):
     """The final estimate_t of each run (estimate_watch's lines), as lists
     of (method, samples) in the order of the runs."""
     done = [(int(m), int(n)) for m, n in
-            re.findall(r"^LOADID-ESTIMATE method (\d+) state 3 samples (\d+)$", text, re.M)]
+            re.findall(r"^LOADID-ESTIMATE method (\d+) state 3 samples (\d+) phi .*$", text, re.M)]
     return [done[i:i + 3] for i in range(0, len(done), 3)]
 
 

@@ -2,9 +2,10 @@
  * estimate_watch: prints every estimate_t on LOADID_ESTIMATE whose state is
  * DONE or FAILED (the final estimates), one line each, until SIGTERM or
  * SIGINT. The vcan VM test runs it beside loadidd to read how many samples
- * reached each estimator:
+ * reached each estimator and what each estimated (phi to the last bit, for
+ * the comparison with `loadidd --offline`):
  *
- *   LOADID-ESTIMATE method 3 state 3 samples 61
+ *   LOADID-ESTIMATE method 3 state 3 samples 61 phi 0.998 -0.0434 ... (10)
  *
  * usage: estimate_watch [LCM_URL]
  */
@@ -25,7 +26,8 @@ static void usage(FILE *out) {
     fprintf(out,
             "usage: estimate_watch [LCM_URL]\n"
             "Prints every final estimate_t (DONE or FAILED) on LOADID_ESTIMATE as\n"
-            "'LOADID-ESTIMATE method M state S samples N' until SIGTERM or SIGINT; LCM_URL\n"
+            "'LOADID-ESTIMATE method M state S samples N phi P0 ... P9' until SIGTERM or\n"
+            "SIGINT; LCM_URL "
             "defaults to udpm://239.255.76.67:7667?ttl=0.\n");
 }
 
@@ -38,8 +40,10 @@ static void on_estimate(const lcm_recv_buf_t *rbuf, const char *channel,
                         const loadid_estimate_t *m, void *ctx) {
     (void)rbuf, (void)channel, (void)ctx;
     if (m->state != LOADID_ESTIMATE_T_DONE && m->state != LOADID_ESTIMATE_T_FAILED) return;
-    printf("LOADID-ESTIMATE method %d state %d samples %lld\n", m->method, m->state,
+    printf("LOADID-ESTIMATE method %d state %d samples %lld phi", m->method, m->state,
            (long long)m->samples);
+    for (int i = 0; i < 10; ++i) printf(" %.17g", m->phi[i]);
+    printf("\n");
     fflush(stdout);
 }
 

@@ -1,12 +1,15 @@
 #!/bin/sh
 # Boots a Debian kernel under qemu (TCG) with an initramfs built here, so the
 # service runs on a real SocketCAN interface (vcan0) although the host
-# kernel has no CAN (DESIGN.md "How the real parts start in tests"). Inside:
+# kernel has no CAN (docs/ARCHITECTURE.md). Inside:
 # the can, can-raw, can-dev and vcan modules, vcan0 up, a multicast route on
 # lo for LCM; canplayer (can-utils) puts can.log on vcan0 while candump
 # counts the frames; then loadidd runs live on vcan0 and LCM while
-# loadid-replay puts the recording on both; loadid-record records a second
-# replay of it (sent back as a base64 tar). Then fault injection: loadidd
+# loadid-replay puts the recording on both, with the allocation counter
+# (tests/support/alloc_count.c) preloaded, estimate_watch printing its final
+# estimates and loadid-record beside it recording what it receives (sent
+# back as a base64 tar, for `loadidd --offline` on the host). Then fault
+# injection: loadidd
 # live on the hand-made parts in FAULTS_DIR (tests/vm/fault_session.py),
 # `loadid zero`, `start` and `stop` between them, one part beside CAN_FLOOD's
 # foreign frames at the full bus rate; a second run with vcan0 removed and
@@ -35,8 +38,10 @@
 #
 # Usage: run_vcan_vm.sh WORKDIR LOADIDD LOADID_REPLAY RECORDING_DIR URDF
 #                       LOADID_CLI LOADID_RECORD ESTIMATE_WATCH FAULTS_DIR CAN_FLOOD
+#                       ALLOC_COUNT_LIB
 set -eu
 work=$1 loadidd=$2 replay=$3 rec=$4 urdf=$5 cli=$6 record=$7 watch=$8 faults=$9 flood=${10}
+alloc=${11}
 mkdir -p "$work"
 cd "$work"
 
@@ -67,11 +72,12 @@ for m in net/can/can.ko net/can/can-raw.ko drivers/net/can/dev/can-dev.ko driver
     cp "$mods/$m" "$root/lib/modules/"
 done
 
-# Programs with their shared libraries (and the dynamic loader), without
-# their debug information: the release build's (-g, Eigen's templates) is
-# most of their 80 MB, and the initramfs must unpack in the VM's 512 MB.
+# Programs (to PATH in the VM, default /bin/NAME) with their shared
+# libraries (and the dynamic loader), without debug information (a
+# debuginfo build's is most of their size, and the initramfs must unpack in
+# the VM's 512 MB).
 copy_prog() {
-    strip --strip-debug -o "$root/bin/$(basename "$1")" "$1"
+    strip --strip-debug -o "$root${2:-/bin/$(basename "$1")}" "$1"
     ldd "$1" | awk '/=> \//{print $3} /^\t\/lib64/{print $1}' | while read -r lib; do
         mkdir -p "$root$(dirname "$lib")"
         cp -L "$lib" "$root$lib"
@@ -80,6 +86,9 @@ copy_prog() {
 for p in "$loadidd" "$replay" "$cli" "$record" "$watch" "$flood" "$(command -v ip)" "$(command -v canplayer)" "$(command -v candump)"; do
     copy_prog "$p"
 done
+# The allocation counter, preloaded into the first daemon (its backtrace()
+# loads libgcc_s, which loadidd links already).
+copy_prog "$alloc" /lib/liballoc_count.so
 mkdir -p "$root/lib64"
 cp -L /lib64/ld-linux-x86-64.so.2 "$root/lib64/"
 
@@ -96,6 +105,8 @@ can:
   interface: vcan0
 lcm:
   url: udpm://239.255.76.67:7667?ttl=0
+estimation:
+  methods: [RTLS, RIV, RLS, REFINED]  # REFINED: the worker thread in the counted loop
 results:
   directory: /results
 kalman:
@@ -152,30 +163,42 @@ dumped() { [ "$(wc -l < /tmp/dump.log)" -ge "$lines" ]; }
 within 5000 dumped || true
 kill $dumper
 echo "LOADID-CANPLAYER lines $lines received $(wc -l < /tmp/dump.log)"
-# The service on vcan0 and LCM, fed by loadid-replay.
-loadidd --config /data/loadid.yaml --verbose 2> /tmp/loadidd.err &
+# The service on vcan0 and LCM, fed by loadid-replay, with the allocation
+# counter preloaded: it counts every allocation between the daemon's first
+# epoll_wait and its last (the report at exit). Beside it estimate_watch
+# prints the final estimates and loadid-record records the frames and joint
+# states the daemon receives (both sockets get every frame with the same
+# kernel time stamp), for `loadidd --offline` on the host.
+estimate_watch > /tmp/live_estimates.txt &
+watcher=$!
+loadid-record --config /data/loadid.yaml --out /tmp/recorded 2> /tmp/record.err &
+recorder=$!
+LD_PRELOAD=/lib/liballoc_count.so LOADID_ALLOC_REPORT=/tmp/alloc.txt \
+    loadidd --config /data/loadid.yaml --verbose 2> /tmp/loadidd.err &
 daemon=$!
 within 10000 daemon_up /data/loadid.yaml || echo "LOADID-VERDICT fail loadidd not up"
+within 5000 grep -q recording /tmp/record.err || echo "LOADID-VERDICT fail loadid-record not up"
 $pin loadid-replay --interface vcan0 /data
-# DONE: the estimate saved; then the replay's last samples counted.
+# DONE: the estimate saved (after REFINED); then the replay's last samples
+# counted.
 within 10000 [ -e /results/latest.yaml ] || echo "LOADID-VERDICT fail no saved estimate"
-sleep 1
+sleep 0.5
 kill -TERM $daemon
-wait $daemon
-cat /tmp/loadidd.err
+wait $daemon && echo "LOADID-LIVE-EXIT 0" || echo "LOADID-LIVE-EXIT $?"
+kill -TERM $recorder
+wait $recorder && echo "LOADID-RECORD-EXIT 0" || echo "LOADID-RECORD-EXIT $?"
+kill -TERM $watcher
+wait $watcher || true
+cat /tmp/loadidd.err /tmp/record.err
+echo "LOADID-LIVE-ESTIMATES-BEGIN"
+cat /tmp/live_estimates.txt
+echo "LOADID-LIVE-ESTIMATES-END"
+echo "LOADID-ALLOC-BEGIN"
+cat /tmp/alloc.txt
+echo "LOADID-ALLOC-END"
 echo "LOADID-RESULT-BEGIN"
 cat /results/latest.yaml
 echo "LOADID-RESULT-END"
-# loadid-record records the same replay (alone: beside the daemon, the two
-# emulated CPUs fell behind the replay's clock).
-loadid-record --config /data/loadid.yaml --out /tmp/recorded 2> /tmp/record.err &
-recorder=$!
-within 5000 grep -q recording /tmp/record.err || echo "LOADID-VERDICT fail loadid-record not up"
-$pin loadid-replay --interface vcan0 /data
-sleep 0.5
-kill -TERM $recorder
-wait $recorder && echo "LOADID-RECORD-EXIT 0" || echo "LOADID-RECORD-EXIT $?"
-cat /tmp/record.err
 echo "LOADID-RECORDING-BEGIN"
 tar -C /tmp -cf - recorded | gzip -1 | base64
 echo "LOADID-RECORDING-END"
