@@ -155,6 +155,7 @@ Gauss load(const Real *w) {
 struct LagEntry {
     int64_t t;
     int piece;
+    int seq;  // updates before it since the filter's (re)start (capped): settled from settle on
     Real xpred[kMaxJoints][3];
     Real nu[kMaxJoints];
 };
@@ -171,6 +172,8 @@ struct loadid_jf {
     int ring_head, ring_count;  // the oldest entry, and how many
     int piece;                  // the current piece of the series
     int64_t piece_start;        // the time of its first update (no entry)
+    int since_start;            // updates since the filter's (re)start (capped)
+    int settle;                 // loadid_jf_settle_steps
 };
 
 extern "C" int loadid_jf_config_default(loadid_jf_config_t *cfg) {
@@ -197,6 +200,9 @@ extern "C" int loadid_jf_create(int num_joints, const loadid_jf_config_t *cfg, l
     jf->n = num_joints;
     jf->last = INT64_MIN;
     jf->ring_head = jf->ring_count = 0;
+    jf->piece = jf->since_start = 0;
+    jf->settle = loadid::settle_steps(
+        *cfg, double(cfg->nominal_step_us > 0 ? cfg->nominal_step_us : 1000) * 1e-6);
     if (cfg->lag_steps > 0) {
         double g[LOADID_JF_MAX_LAG + 1][3];
         loadid::fixed_lag_gains(*cfg, double(cfg->nominal_step_us) * 1e-6, cfg->lag_steps, g);
@@ -213,7 +219,7 @@ extern "C" int loadid_jf_reset(loadid_jf_t *jf) {
     if (!jf) return -EINVAL;
     jf->last = INT64_MIN;
     jf->ring_head = jf->ring_count = 0;
-    jf->piece = 0;
+    jf->piece = jf->since_start = 0;
     return 0;
 }
 
@@ -232,12 +238,14 @@ extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real
         // a sample just after it is served from it, as the filter would.
         ++jf->piece;
         jf->piece_start = t_us;
+        jf->since_start = 0;
         if (lag > 0) {
             if (jf->ring_count == kRing) jf->ring_head = (jf->ring_head + 1) % kRing;
             else ++jf->ring_count;
             LagEntry *e = &jf->ring[(jf->ring_head + jf->ring_count - 1) % kRing];
             e->t = t_us;
             e->piece = jf->piece;
+            e->seq = 0;
             for (int i = 0; i < jf->n; ++i) {
                 for (int c = 0; c < 3; ++c) e->xpred[i][c] = jf->joint[i].x[c];
                 e->nu[i] = 0;
@@ -252,6 +260,7 @@ extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real
             e = &jf->ring[(jf->ring_head + jf->ring_count - 1) % kRing];
             e->t = t_us;
             e->piece = jf->piece;
+            e->seq = jf->since_start;
         }
         for (int i = 0; i < jf->n; ++i) {
             predict(jf->joint[i], dt, jf->cfg.jerk_psd);
@@ -263,6 +272,7 @@ extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real
         }
     }
     jf->last = t_us;
+    if (jf->since_start < INT32_MAX) ++jf->since_start;
     return 0;
 }
 
@@ -293,7 +303,13 @@ extern "C" int loadid_jf_end_piece(loadid_jf_t *jf) {
     if (jf->last == INT64_MIN) return 0;
     ++jf->piece;
     jf->piece_start = jf->last + 1;  // what came before is served now
-    return 0;
+    return 0;  // the filter goes on: no settling
+}
+
+extern "C" int loadid_jf_settle_steps(const loadid_jf_t *jf) { return jf ? jf->settle : -EINVAL; }
+
+extern "C" int loadid_jf_settled(const loadid_jf_t *jf) {
+    return jf && jf->last != INT64_MIN && jf->since_start > jf->settle;
 }
 
 // Entries of the current piece at the ring's end.
@@ -358,6 +374,8 @@ extern "C" int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, in
         distance_us(t_us, ring_at(jf, j + 1).t) <= uint64_t(max_age_us))
         ++j;
     const LagEntry &e0 = ring_at(jf, j);
+    // The filter had not settled there: never served (joint_filter.h).
+    if (e0.seq < jf->settle) return LOADID_E_STALE;
     const int after = updates_after(jf, j, lag);
     if (e0.piece == jf->piece && after < lag) return LOADID_E_NO_DATA;  // not smoothed yet
     if (distance_us(e0.t, t_us) > uint64_t(max_age_us)) return LOADID_E_STALE;

@@ -63,6 +63,29 @@ void fixed_lag_gains(const loadid_jf_config_t &cfg, double dt, int lag, double g
     }
 }
 
+int settle_steps(const loadid_jf_config_t &cfg, double dt) {
+    M3 F, P, Pp;
+    double r;
+    steady_filter(cfg, dt, F, P, Pp, r);
+    const M3 steady = Pp;
+    const double d2 = dt * dt, d3 = d2 * dt;
+    M3 Q;
+    Q << d3 * d2 / 20, d2 * d2 / 8, d3 / 6, d2 * d2 / 8, d3 / 3, d2 / 2, d3 / 6, d2 / 2, dt;
+    Q *= double(cfg.jerk_psd);
+    P = M3::Zero();  // after the first measurement (joint_filter.cpp, initialise)
+    P.diagonal() << r, double(cfg.init_sigma_vel) * double(cfg.init_sigma_vel),
+        double(cfg.init_sigma_acc) * double(cfg.init_sigma_acc);
+    for (int k = 1; k < kMaxSettle; ++k) {
+        Pp = F * P * F.transpose() + Q;
+        if ((Pp.diagonal().array() <= kSettleFactor * steady.diagonal().array()).all()) return k;
+        const Eigen::Vector3d K = Pp.col(0) / (Pp(0, 0) + r);
+        M3 A = M3::Identity();
+        A.col(0) -= K;
+        P = A * Pp * A.transpose() + r * K * K.transpose();
+    }
+    return kMaxSettle;
+}
+
 }  // namespace loadid
 
 extern "C" int loadid_jf_noise_sigma(const loadid_jf_config_t *cfg, double dt, double sigma[3]) {

@@ -61,6 +61,8 @@ int kinematics_of(const loadid_signals *s, const loadid_jf_t *jf, int lag, int64
     loadid_real_t q[LOADID_MAX_JOINTS], qd[LOADID_MAX_JOINTS], qdd[LOADID_MAX_JOINTS];
     int rc = lag > 0 ? loadid_jf_lagged_state_at(jf, t_us, s->cfg.max_joint_age_us, q, qd, qdd)
                      : stream_ready(jf, t_us, s->cfg.max_joint_age_us);
+    // The causal filter serves only once settled (joint_filter.h).
+    if (rc == 0 && lag == 0 && !loadid_jf_settled(jf)) rc = LOADID_E_STALE;
     if (rc == 0 && lag == 0) rc = loadid_jf_state_at(jf, t_us, q, qd, qdd);
     if (rc != 0) return rc;
     return loadid_kin_eval(s->kin, q, qd, qdd, out);

@@ -403,14 +403,16 @@ static void on_ft_sample(void *ctx, const loadid_modbus_ft_sample_t *s) {
     loadid_pipeline_ft_sample(L->pipe, s->t_us, s->force, s->torque, s->saturated, s->faulty);
 }
 
-/* Once a second: say when the serial sensor was lost or came back. */
+/* Once a second: say when the serial sensor was lost or came back (both
+ * within the second: the poller reopens after a response timeout). */
 static void watch_ft(live_t *L) {
+    const bool lost = loadid_modbus_input_take_lost(L->ft);
     loadid_modbus_input_stats_t ms;
     loadid_modbus_input_stats(L->ft, &ms);
-    if (loadid_modbus_input_take_lost(L->ft))
+    if (lost)
         fprintf(stderr, "loadidd: modbus %s lost: %s; reopening\n", L->cfg->modbus_device,
-                loadid_modbus_ft_strerror((int)ms.last_error));
-    if (ms.connected && !L->ft_connected)
+                loadid_modbus_ft_strerror((int)ms.lost_error));
+    if (ms.connected && (!L->ft_connected || lost))
         fprintf(stderr, "loadidd: modbus %s open\n", L->cfg->modbus_device);
     L->ft_connected = ms.connected;
 }

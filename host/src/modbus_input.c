@@ -25,6 +25,7 @@ _Static_assert(sizeof(loadid_modbus_ft_stats_t) % sizeof(int64_t) == 0,
 struct loadid_modbus_input {
     loadid_modbus_ft_t *ft;        /* the thread's only */
     int64_t period_ns;
+    int retry_min_ms;              /* the first retry after a loss: modbus.timeout_ms */
     int efd;
     pthread_t thread;
     atomic_bool stop;
@@ -36,7 +37,7 @@ struct loadid_modbus_input {
     _Alignas(64) atomic_size_t tail;
 
     _Alignas(64) _Atomic int64_t ft_stats[FT_FIELDS];
-    _Atomic int64_t delivered, overruns, missed, open_attempts, connected, last_error;
+    _Atomic int64_t delivered, overruns, missed, open_attempts, connected, last_error, lost_error;
     atomic_bool lost;
     _Atomic double fs[6];
 };
@@ -123,10 +124,18 @@ static void pause_ms(loadid_modbus_input_t *in, int ms)
     }
 }
 
+/* The next wait before an open attempt: twice the last, at most
+ * LOADID_MODBUS_INPUT_RETRY_MS. */
+static int backoff(int ms)
+{
+    return ms >= LOADID_MODBUS_INPUT_RETRY_MS / 2 ? LOADID_MODBUS_INPUT_RETRY_MS : 2 * ms;
+}
+
 static void *poller(void *arg)
 {
     loadid_modbus_input_t *in = arg;
     int64_t next = mono_ns();
+    int retry_ms = in->retry_min_ms;
     while (!atomic_load(&in->stop)) {
         if (!loadid_modbus_ft_is_open(in->ft)) {
             atomic_fetch_add(&in->open_attempts, 1);
@@ -134,11 +143,13 @@ static void *poller(void *arg)
             mirror(in);
             if (rc < 0) {
                 atomic_store(&in->last_error, rc);
-                pause_ms(in, LOADID_MODBUS_INPUT_RETRY_MS);
+                pause_ms(in, retry_ms);
+                retry_ms = backoff(retry_ms);
                 continue;
             }
             publish_full_scale(in);
             atomic_store(&in->connected, 1);
+            retry_ms = in->retry_min_ms;
             next = mono_ns();
         }
         loadid_modbus_ft_sample_t s;
@@ -151,9 +162,14 @@ static void *poller(void *arg)
         }
         mirror(in);
         if (rc == LOADID_MODBUS_FT_E_GONE) {
+            /* As libmodbus' link recovery: reconnect after one response
+             * timeout (a USB adapter re-enumerated, a connector wiggled),
+             * then back off (modbus_input.h). */
             atomic_store(&in->connected, 0);
+            atomic_store(&in->lost_error, rc);
             atomic_store(&in->lost, true);
-            pause_ms(in, LOADID_MODBUS_INPUT_RETRY_MS);
+            pause_ms(in, retry_ms);
+            retry_ms = backoff(retry_ms);
             continue;
         }
         /* The next period on an absolute deadline; periods a slow
@@ -205,6 +221,8 @@ int loadid_modbus_input_start(const loadid_config_t *cfg, loadid_modbus_input_t 
         goto fail;
     }
     in->period_ns = (int64_t)(1e9 / cfg->modbus_rate_hz);
+    in->retry_min_ms = fc.timeout_ms < LOADID_MODBUS_INPUT_RETRY_MS ? fc.timeout_ms
+                                                                    : LOADID_MODBUS_INPUT_RETRY_MS;
     if (in->period_ns < 1) in->period_ns = 1;
     atomic_init(&in->head, 0);
     atomic_init(&in->tail, 0);
@@ -272,6 +290,7 @@ int loadid_modbus_input_stats(const loadid_modbus_input_t *in, loadid_modbus_inp
     st->open_attempts = atomic_load(&in->open_attempts);
     st->connected = atomic_load(&in->connected);
     st->last_error = atomic_load(&in->last_error);
+    st->lost_error = atomic_load(&in->lost_error);
     return 0;
 }
 

@@ -13,9 +13,13 @@
  * malformed and failed reads are only counted. When the ring is full (the
  * loop stalled for seconds) the newest sample is dropped and counted.
  * Device loss: the thread closes the device, sets a flag the loop takes
- * with loadid_modbus_input_take_lost() to log it, counts it, and retries
- * opening once a second; the first open also happens in the thread, so
- * start never blocks on the serial line.
+ * with loadid_modbus_input_take_lost() to log it, counts it, and tries to
+ * open it again after one response timeout (modbus.timeout_ms), as
+ * libmodbus' own link recovery reconnects, then after twice as long at
+ * each failure, up to once a second: a device back within a few tenths of
+ * a second costs about as long again, one that stays away costs an open
+ * attempt a second. The first open also happens in the thread (a failure
+ * there retries the same way), so start never blocks on the serial line.
  */
 #ifndef LOADID_MODBUS_INPUT_H
 #define LOADID_MODBUS_INPUT_H
@@ -28,7 +32,7 @@
 #include "loadid/modbus_ft.h"
 
 #define LOADID_MODBUS_INPUT_RING 1024 /* samples: 5 s at 200 Hz; a power of 2 */
-#define LOADID_MODBUS_INPUT_RETRY_MS 1000 /* between open attempts */
+#define LOADID_MODBUS_INPUT_RETRY_MS 1000 /* the longest wait between open attempts */
 
 typedef struct {
     loadid_modbus_ft_stats_t ft; /* the driver's counters (modbus_ft.h) */
@@ -40,6 +44,8 @@ typedef struct {
     int64_t connected;           /* 1 while the device is open */
     int64_t last_error;          /* the last failure's code
                                     (loadid_modbus_ft_strerror), 0 none */
+    int64_t lost_error;          /* the last loss's (later failures, a
+                                    reopen's say, do not change it), 0 none */
 } loadid_modbus_input_stats_t;
 
 typedef struct loadid_modbus_input loadid_modbus_input_t; /* opaque */

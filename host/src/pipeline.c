@@ -905,6 +905,14 @@ void loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *f
 
 /* A JR3 sample's queue slot, so that both sensors share one path. */
 static void enqueue(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
+    /* The joint stream stalled (by the samples' own clock, so offline as
+     * live): the smoother serves what came, as loadid_pipeline_tick does,
+     * before the queue fills and serves samples it could have smoothed. */
+    const int64_t newest = loadid_signals_newest_joint_time(p->sig);
+    if (newest != INT64_MIN && s->t_us - newest > TICK_GRACE_US) {
+        loadid_signals_end_piece(p->sig);
+        flush_pending(p, INT64_MIN, 1);
+    }
     if (p->pending_count == PENDING_MAX) pop_pending(p); /* joints this late: serve it now */
     p->pending[(p->pending_head + p->pending_count) % PENDING_MAX] = *s;
     p->pending_count++;

@@ -53,6 +53,14 @@ void loadid_setup_signals(const loadid_config_t *cfg, loadid_signal_source_t sou
     out->measured.nominal_step_us = out->setpoint.nominal_step_us = period > 0 ? period : 1000;
     out->measured.lag_steps = out->setpoint.lag_steps =
         (int)llround(cfg->kalman_lag_s / cfg->kalman_joint_period_s);
+    /* Joint data too old to serve a sample cannot carry the filters across
+     * a stall either: a step longer than max_joint_age restarts them (the
+     * samples after it wait for them to settle, joint_filter.h). At least
+     * two periods, so that one lost joint state is bridged. */
+    const int64_t step = out->max_joint_age_us > 2 * out->measured.nominal_step_us
+                             ? out->max_joint_age_us
+                             : 2 * out->measured.nominal_step_us;
+    out->measured.max_step_us = out->setpoint.max_step_us = step;
 }
 
 int loadid_setup_weights(const loadid_config_t *cfg, loadid_signal_source_t source,

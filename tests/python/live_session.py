@@ -14,6 +14,12 @@ the daemon's). LOADID_SESSION_FLOOD_HZ in the environment: a second LCM
 handle publishes that many messages a second on foreign channels (other
 robots' joint states and a camera's, 100-400 bytes) from the daemon's start
 to its stop; the count sent is in the JSON ("flood_sent").
+LOADID_SESSION_STALL=T0:T1[,T2:T3...] (recording utimes): the joint states
+stamped in those spans are not published (the joint stream stalls and
+resumes), the daemon runs with --verbose, and the session ends when the
+recording reaches LOADID_SESSION_UNTIL (a recording utime, if given),
+without the CLI's calls. "shift" in the JSON is the daemon's clock less
+the recording's.
 """
 
 from __future__ import annotations
@@ -49,9 +55,13 @@ def main():
     if os.environ.get("LOADID_DAEMON_PRELOAD"):
         env["LD_PRELOAD"] = os.environ["LOADID_DAEMON_PRELOAD"]
 
+    stalls = [tuple(int(x) for x in span.split(":"))
+              for span in os.environ.get("LOADID_SESSION_STALL", "").split(",") if span]
+    until = int(os.environ.get("LOADID_SESSION_UNTIL", "0")) or None
     epoch = int(time.time() * 1e6) + 1_500_000
     daemon = subprocess.Popen([loadidd, "--config", config, "--can-file", f"{rec}/can.log",
-                               "--can-file-epoch", str(epoch), "--publish-every", "100"],
+                               "--can-file-epoch", str(epoch), "--publish-every", "100",
+                               *(["--verbose"] if stalls else [])],
                               stderr=subprocess.PIPE, text=True, env=env)
     flood = {"sent": 0, "stop": threading.Event()}
 
@@ -93,7 +103,11 @@ def main():
         out.pump(until, drain_notify)
 
     for t, channel, data in events:
+        if until and t >= until:
+            break
         pump((t + shift) / 1e6)
+        if channel == "LOADID_JOINTS" and any(t0 <= t < t1 for t0, t1 in stalls):
+            continue  # the stream stalls
         if channel == "LOADID_JOINTS":
             msg = loadid.joint_state_t.decode(data)
             msg.utime += shift
@@ -111,7 +125,7 @@ def main():
                                   if l.startswith("Cpus_allowed_list")),
                      "vmlck_kb": int(next(l.split()[1] for l in status.splitlines()
                                           if l.startswith("VmLck")))}
-    pump(time.time() + 1.5)  # the last samples and the wrenches after DONE
+    pump(time.time() + (0.3 if until else 1.5))  # the last samples (and wrenches after DONE)
     memory = {}
     if daemon.poll() is None:
         for line in open(f"/proc/{daemon.pid}/status"):
@@ -123,9 +137,11 @@ def main():
                            timeout=20)
         return {"rc": r.returncode, "out": r.stdout, "err": r.stderr}
 
-    cli_log = [cli_run("status", "--timeout", "3"), cli_run("reset")]
-    pump(time.time() + 0.2)
-    cli_log.append(cli_run("status", "--timeout", "3"))
+    cli_log = []
+    if not until:
+        cli_log = [cli_run("status", "--timeout", "3"), cli_run("reset")]
+        pump(time.time() + 0.2)
+        cli_log.append(cli_run("status", "--timeout", "3"))
     daemon.terminate()  # SIGTERM: a clean stop
     deadline = time.time() + 10
     while daemon.poll() is None and time.time() < deadline:
@@ -140,12 +156,13 @@ def main():
 
     def est(m):
         return {"method": m.method, "state": m.state, "samples": m.samples, "phi": list(m.phi),
+                "utime": m.utime,
                 "load_name": m.load_name, "mass": m.mass}
 
     print(json.dumps({
         "returncode": daemon.returncode, "stderr": err, "cli": cli_log, "notify": notes,
         "sched": sched, "memory_kb": memory, "reencoded_differ": out.reencoded_differ,
-        "flood_sent": flood["sent"],
+        "flood_sent": flood["sent"], "shift": shift,
         "estimate": [est(m) for m in got["estimate"]],
         "status": [{"state": m.state, "samples_ok": m.samples_ok, "frames_bad": m.frames_bad,
                     "samples_incomplete": m.samples_incomplete,

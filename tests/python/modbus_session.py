@@ -7,13 +7,18 @@ pytest):
 Sets loopback up with a multicast route, starts loadid-modbus-sim on a new
 pseudo-terminal (behind the symlink LINK, the configuration's
 modbus.device) serving the recording's JR3 wrench in real time from an
-epoch 2 s ahead, starts loadidd live (sensor.type modbus), and publishes
-the recording's joint states and commands on LCM at the same times. When
-the recording ends the simulated sensor exits (the daemon must report the
-device lost and go on); a second simulator then serves a constant wrench
-behind the same link (the daemon must reopen it: wrench_t flows again).
-Prints as JSON what came back on LOADID_ESTIMATE, LOADID_STATUS and
-LOADID_WRENCH, the daemon's stderr and exit status after SIGTERM.
+epoch 2 s ahead, starts loadidd live (sensor.type modbus, --verbose), and
+publishes the recording's joint states and commands on LCM at the same
+times. On the recording's timeline (PLAN, seconds after its first sample)
+the sensor vanishes twice and comes back behind the same link, serving the
+same recording from the same epoch: once after zeroing and before START
+(the estimate comes after it), once while DONE (the compensated wrench
+shows when its samples are used again); the second sensor leaves some
+reads unanswered and answers some with a bad CRC. Before the recording
+ends the last sensor goes too, then the daemon is stopped. Prints as JSON what came back on LOADID_ESTIMATE,
+LOADID_STATUS and LOADID_WRENCH, the daemon's stderr and exit status after
+SIGTERM, and for each sensor its stderr (its own tally of what it answered)
+and the wall times it was ready and gone.
 LOADID_DAEMON_PRELOAD in the environment is the daemon's LD_PRELOAD (only
 the daemon's: test_live_no_alloc.py's allocation counter).
 """
@@ -27,6 +32,11 @@ import sys
 import time
 
 from lcm_loopback import open_session
+
+# Seconds after the recording's first sample (ZERO at 0.05 s, zeroing until
+# 0.25 s, START at 1.0 s, DONE at 2.5 s, its end at 3.3 s).
+PLAN = {"lost": [0.30, 2.70], "back": [0.60, 2.90], "silent": (0.70, 0.85),
+        "bad_crc": (0.88, 0.93), "until": 3.20}
 
 
 def start_sim(sim, *args):
@@ -44,42 +54,56 @@ def main():
     pump = out.pump
 
     epoch = int(time.time() * 1e6) + 2_000_000
-    sensor = start_sim(sim, "--recording", rec, "--config", config, "--link", link,
-                       "--epoch", str(epoch))
+    # --loop: the last sensor must not end with the recording before the
+    # daemon does (one more loss).
+    common = ["--recording", rec, "--config", config, "--link", link, "--epoch", str(epoch),
+              "--loop"]
+    sensors = []  # {"proc", "ready_us", "gone_us", "stderr"}
+
+    def sensor_up(*extra):
+        p = start_sim(sim, *common, *extra)
+        sensors.append({"proc": p, "ready_us": int(time.time() * 1e6)})
+
+    def sensor_down():
+        s = sensors[-1]
+        s["proc"].terminate()  # it closes the pty and removes the link
+        s["stderr"] = s["proc"].communicate(timeout=10)[1]
+        s["gone_us"] = int(time.time() * 1e6)
+
+    sensor_up()
     env = dict(os.environ)
     if os.environ.get("LOADID_DAEMON_PRELOAD"):
         env["LD_PRELOAD"] = os.environ["LOADID_DAEMON_PRELOAD"]
     daemon = subprocess.Popen([loadidd, "--config", config, "--publish-every", "100",
                                "--verbose"], stderr=subprocess.PIPE, text=True, env=env)
+    faults = ["--silent", "%g:%g" % PLAN["silent"], "--bad-crc", "%g:%g" % PLAN["bad_crc"]]
+    actions = sorted([(t, sensor_down, ()) for t in PLAN["lost"]] +
+                     [(PLAN["back"][0], sensor_up, faults), (PLAN["back"][1], sensor_up, ())],
+                     key=lambda a: a[0])
     shift = epoch - first_can
     for t, channel, data in events:
+        rel = (t - first_can) / 1e6
+        if rel >= PLAN["until"]:
+            break
         pump((t + shift) / 1e6)
+        while actions and actions[0][0] <= rel:
+            _, act, args = actions.pop(0)
+            act(*args)
         cls = loadid.joint_state_t if channel == "LOADID_JOINTS" else loadid.command_t
         msg = cls.decode(data)
         msg.utime += shift
         lc.publish(channel, msg.encode())
-    pump(time.time() + 0.5)
-    # The recording is over: the simulated sensor exits on its own.
-    sensor.wait(timeout=10)
-    pump(time.time() + 2.5)  # the daemon notices (a timeout or EIO), retries once a second
-    restart_us = int(time.time() * 1e6)
-    sensor = start_sim(sim, "--wrench", "0,0,9.81,0,0,0", "--config", config, "--link", link)
-    # Joint states go on (the last pose, now) so that wrench_t can be computed.
-    last = loadid.joint_state_t.decode(next(d for _, c, d in reversed(events)
-                                            if c == "LOADID_JOINTS"))
-    until = time.time() + 3.0
-    while time.time() < until:
-        last.utime = int(time.time() * 1e6)
-        lc.publish("LOADID_JOINTS", last.encode())
-        pump(time.time() + 0.002)
+    # The last sensor goes first, so that the daemon's counts at exit hold
+    # every read any sensor answered (a third loss).
+    sensor_down()
+    pump(time.time() + 0.1)
     daemon.terminate()  # SIGTERM: a clean stop
     err = daemon.communicate(timeout=15)[1]
-    sensor.terminate()
-    sensor.wait(timeout=10)
     pump(time.time() + 0.3)
 
     print(json.dumps({
-        "returncode": daemon.returncode, "stderr": err, "restart_us": restart_us,
+        "returncode": daemon.returncode, "stderr": err, "plan": PLAN,
+        "sensors": [{k: v for k, v in s.items() if k != "proc"} for s in sensors],
         "estimate": [{"method": m.method, "state": m.state, "samples": m.samples,
                       "phi": list(m.phi), "mass": m.mass, "com": list(m.com)}
                      for m in got["estimate"]],
@@ -88,6 +112,7 @@ def main():
                     "samples_saturated": m.samples_saturated, "sequence_gaps": m.sequence_gaps,
                     "joint_msgs_bad": m.joint_msgs_bad} for m in got["status"]],
         "wrench_utimes": [m.utime for m in got["wrench"]],
+        "wrench": [list(m.force) + list(m.torque) for m in got["wrench"]],
     }))
 
 

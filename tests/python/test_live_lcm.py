@@ -17,10 +17,12 @@ import shutil
 import subprocess
 import sys
 
+import lcm
 import numpy as np
 import pytest
 
-from accuracy import BOUNDS, assert_accuracy
+import joint_stall
+from accuracy import BOUNDS, assert_accuracy, load_errors
 from recordings import program, read_truth
 
 HERE = pathlib.Path(__file__).resolve().parent
@@ -242,3 +244,99 @@ def test_lcm_flood_changes_nothing(session, recording, tmp_path, monkeypatch):
         np.testing.assert_allclose(loud[m]["phi"], e["phi"], rtol=1e-9, atol=1e-12)
     final = [s for s in flood["status"] if s["state"] == 3]
     assert final and final[-1]["joint_msgs_bad"] == 0
+
+
+def offline_final(cfg, rec, *extra):
+    """loadidd --offline's final estimates by method name, with the live
+    session's configuration less its results directory (offline saves its
+    estimate too)."""
+    plain = cfg.parent / "offline.yaml"
+    plain.write_text(re.sub(r"^results:\n(  .*\n)+", "", cfg.read_text(), flags=re.M))
+    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(plain), "--offline", str(rec),
+                        *extra], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    return {o["method"]: o for o in json.loads(r.stdout)}
+
+
+# (stall length ms, when after START ms): 20 ms alone (complete), then 50
+# and 300 ms in one session (incomplete).
+STALL_SESSIONS = [((20, 500),), ((50, 300), (300, 800))]
+
+
+@pytest.mark.parametrize("stalls", STALL_SESSIONS, ids=["20ms", "50ms+300ms"])
+def test_joint_stream_stalls_and_resumes(recording, tmp_path, lcmtypes, monkeypatch, capsys,
+                                         stalls):
+    """The joint stream stops for 20, 50 or 300 ms in the estimation window
+    and resumes (the CAN samples go on). The samples the daemon refuses
+    are exactly those joint_stall.py derives from the recording's own
+    frame and joint-state times (more than kalman.max_joint_age_s from
+    joint data, or while the joint filters settle after the restart a
+    stall over max_joint_age_s makes): a stall of S ms refuses S - 4 + 10
+    samples; per stall, from the estimates published (every 100 samples)
+    before the next. None is estimated on guessed joints: the estimate
+    equals --offline's on the same stalled streams (1e-9) and every method
+    stays within the clean recording's bounds (accuracy.py; 0.17-0.20 % of
+    the mass seen for RTLS). The run is complete while the refused share
+    is at most estimation.max_missing_share (2 %: 30 of 1500), else said
+    incomplete. Prints a figure per stall."""
+    start = int(read_truth(recording)["times.start"])
+    spans = [(start + 1000 * at, start + 1000 * (at + ms)) for ms, at in stalls]
+    # The same streams as a recording, for --offline and the expectation.
+    rec = tmp_path / "stalled"
+    rec.mkdir()
+    shutil.copy(recording / "can.log", rec / "can.log")
+    log = lcm.EventLog(str(rec / "lcm.log"), "w", overwrite=True)
+    for ev in lcm.EventLog(str(recording / "lcm.log"), "r"):
+        if not (ev.channel == "LOADID_JOINTS" and any(a <= ev.timestamp < b for a, b in spans)):
+            log.write_event(ev.timestamp, ev.channel, ev.data)
+    log.close()
+    window = [t for t in joint_stall.sample_times(rec) if start <= t < start + 1_500_000]
+    joints = joint_stall.joint_times(rec, lcmtypes)
+    expected = joint_stall.refused(window, joints)
+    settle = joint_stall.settle_steps()
+    assert len(window) == 1500
+    assert len(expected) == sum(ms - 4 + settle for ms, _ in stalls), len(expected)
+    # REFINED interpolates its smoothed joints only across steps up to the
+    # filters' default max_step_us (0.1 s): past a longer stall it also
+    # leaves out the samples within max_joint_age_s after the last joint
+    # state, which the on-line methods serve.
+    refined_less = 0
+    for a, b in spans:
+        last = max(t for t in joints if t < a)
+        if b - last > 100_000:
+            refined_less += sum(last < t <= last + 5000 for t in window)
+
+    monkeypatch.setenv("LOADID_SESSION_STALL", ",".join(f"{a}:{b}" for a, b in spans))
+    # The window's end and the fixed-lag smoother's 50 ms after it.
+    monkeypatch.setenv("LOADID_SESSION_UNTIL", str(start + 1_600_000))
+    out = run_session(live_config(tmp_path), recording)
+    assert out["returncode"] == 0, out["stderr"]
+    final = {e["method"]: e for e in out["estimate"] if e["state"] == 3}
+    assert sorted(final) == [1, 2, 3, 6], out["stderr"]
+    phi = np.array(json.loads(read_truth(recording)["load.phi"]))
+    err = load_errors(final[3]["phi"], phi)
+    incomplete = "loadidd: incomplete: joint data missing" in out["stderr"]
+    # Refused per stall: window samples up to an estimate's newest less
+    # those it used, at the last RTLS estimate before the next stall.
+    running = [(e["utime"] - out["shift"], e["samples"]) for e in out["estimate"]
+               if e["state"] == 2 and e["method"] == 3]
+    seen, before = [], 0
+    for (ms, _), (a, b), nxt in zip(stalls, spans, [a for a, _ in spans[1:]] + [None]):
+        t, used = max(r for r in running + [(start + 1_500_000, final[3]["samples"])]
+                      if r[0] >= b + 1000 * settle and (nxt is None or r[0] < nxt))
+        seen.append(sum(w <= t for w in window) - used - before)
+        before += seen[-1]
+        want = sum(a <= x < b + 1000 * settle for x in expected)
+        with capsys.disabled():
+            print(f"\nstall {ms} ms: {seen[-1]} samples refused (expected {want}), RTLS mass "
+                  f"error {err['mass_pct']:.2f} %, COM {err['com_mm']:.2f} mm, complete "
+                  f"{not incomplete}" + (" (with the other stalls)" if len(stalls) > 1 else ""))
+        assert seen[-1] == want, (ms, seen, want)
+    assert [final[m]["samples"] for m in (1, 2, 3, 6)] == \
+        [1500 - len(expected)] * 3 + [1500 - len(expected) - refined_less], final
+    assert incomplete == (len(expected) > 0.02 * 1500), out["stderr"]
+    offline = offline_final(out["config"], rec, "--allow-incomplete")
+    names = {1: "RLS", 2: "RIV", 3: "RTLS", 6: "REFINED"}
+    for m, e in final.items():
+        np.testing.assert_allclose(e["phi"], offline[names[m]]["phi"], rtol=1e-9, atol=1e-12)
+        assert_accuracy(e, phi, **BOUNDS["default"])

@@ -50,6 +50,7 @@ typedef struct {
     loadid_est_t *est[NEST];
     loadid_signals_t *sig;
     loadid_signals_t *sig_lag; /* with the fixed-lag smoother */
+    int settle;                /* the filters' settling count (joint_filter.h) */
     int64_t t_us[NSAMPLES];
     loadid_real_t q[NSAMPLES][NJ];
     loadid_real_t *smooth_work;
@@ -79,6 +80,11 @@ static void signals_make(workload_t *w) {
     loadid_signals_config_t cfg;
     loadid_signals_config_default(&cfg);
     assert_int_equal(loadid_signals_create(&c, g, &cfg, &w->sig), 0);
+    loadid_jf_t *jf = NULL;
+    assert_int_equal(loadid_jf_create(NJ, &cfg.measured, &jf), 0);
+    w->settle = loadid_jf_settle_steps(jf);
+    loadid_jf_destroy(jf);
+    assert_true(w->settle > 0 && w->settle < NSAMPLES / 4);
     cfg.measured.lag_steps = cfg.setpoint.lag_steps = 20;
     assert_int_equal(loadid_signals_create(&c, g, &cfg, &w->sig_lag), 0);
     for (int k = 0; k < NSAMPLES; ++k) {
@@ -99,12 +105,16 @@ static int signals_run(workload_t *w) {
     for (int k = 0; k < NSAMPLES; ++k) {
         if (loadid_signals_push_joints(w->sig, w->t_us[k], NJ, w->q[k], w->q[k]) != 0) ++bad;
         loadid_regressor_input_t m, instr;
-        if (loadid_signals_at(w->sig, w->t_us[k] + 300, spec, alpha, NULL, &m, &instr) != 0) ++bad;
+        /* (refused while the filters settle: joint_filter.h) */
+        if (loadid_signals_at(w->sig, w->t_us[k] + 300, spec, alpha, NULL, &m, &instr) !=
+            (k < w->settle ? LOADID_E_STALE : 0))
+            ++bad;
         /* The fixed-lag smoother serves a sample 20 joint states later. */
         if (loadid_signals_push_joints(w->sig_lag, w->t_us[k], NJ, w->q[k], w->q[k]) != 0) ++bad;
         if (k >= 21 && loadid_signals_last_joint_time(w->sig_lag) != w->t_us[k - 19] - 1) ++bad;
         if (k >= 21 &&
-            loadid_signals_at(w->sig_lag, w->t_us[k - 20] + 300, spec, alpha, NULL, &m, &instr) != 0)
+            loadid_signals_at(w->sig_lag, w->t_us[k - 20] + 300, spec, alpha, NULL, &m, &instr) !=
+                (k - 20 < w->settle ? LOADID_E_STALE : 0))
             ++bad;
         if (k == NSAMPLES / 2) {
             if (loadid_signals_push_joints(w->sig, w->t_us[k], NJ, w->q[k], NULL) != LOADID_E_TIME_ORDER) ++bad;

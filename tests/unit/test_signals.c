@@ -92,6 +92,18 @@ static loadid_signals_t *make(loadid_signal_source_t source) {
     return s;
 }
 
+/* The joint filters' settling count (joint_filter.h) in make()'s setup. */
+static int settle_of(loadid_signal_source_t source) {
+    loadid_signals_config_t cfg;
+    assert_int_equal(loadid_signals_config_default(&cfg), 0);
+    cfg.source = source;
+    loadid_jf_t *jf = NULL;
+    assert_int_equal(loadid_jf_create(NJ, &cfg.measured, &jf), 0);
+    const int n = loadid_jf_settle_steps(jf);
+    loadid_jf_destroy(jf);
+    return n;
+}
+
 /* The forward kinematics of the analytic state of p at time t. */
 static loadid_kin_state_t truth_at(const quad_t *p, double t) {
     loadid_chain_t chain;
@@ -244,18 +256,27 @@ static void stale_and_missing_joints_are_refused_and_counted(void **state) {
                      LOADID_E_STALE);
     assert_int_equal(loadid_signals_at(s, INT64_MAX, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_STALE);
     assert_memory_equal(&m, &untouched, sizeof m);
-    /* RIV's instruments need setpoints: a stream without them is refused. */
+    /* RIV's instruments need setpoints: a stream without them is refused.
+     * Its first joint states serve nothing while the filter settles. */
     loadid_signals_reset(s);
+    const int settle = settle_of(LOADID_SIGNALS_MIXED);
+    assert_true(settle > 1 && settle < 100);
     loadid_real_t q[3 * NJ];
-    quad_at(&kMeasured, 0, q);
-    assert_int_equal(loadid_signals_push_joints(s, 0, NJ, q, NULL), 0);
+    for (int k = 0; k <= settle; ++k) {
+        quad_at(&kMeasured, k * 1e-3, q);
+        assert_int_equal(loadid_signals_push_joints(s, 1000 * k, NJ, q, NULL), 0);
+        if (k == 0)
+            assert_int_equal(loadid_signals_at(s, 0, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_STALE);
+    }
+    const int64_t t1 = 1000 * settle;
     loadid_regressor_input_t instr;
-    assert_int_equal(loadid_signals_at(s, 0, kJr3Spec, NULL, NULL, &m, &instr), LOADID_E_NO_DATA);
-    assert_int_equal(loadid_signals_at(s, 0, kJr3Spec, NULL, NULL, &m, NULL), 0);
+    assert_int_equal(loadid_signals_at(s, t1, kJr3Spec, NULL, NULL, &m, &instr), LOADID_E_NO_DATA);
+    assert_int_equal(loadid_signals_at(s, t1, kJr3Spec, NULL, NULL, &m, NULL), 0);
 
     loadid_signals_stats_t st;
     loadid_signals_stats(s, &st);
     assert_int_equal(st.samples_no_joints, 1);
+    assert_int_equal(st.samples_stale, 1);
     assert_int_equal(st.samples_ok, 1);
     loadid_signals_destroy(s);
 

@@ -16,6 +16,13 @@
  * the recording sees stale reads, and one that polls slower sees gaps.
  * Saturated or faulty JR3 samples keep their status bits. A constant
  * wrench is measured anew for every read (the counter counts the reads).
+ * --silent T0:T1 and --bad-crc T0:T1 (seconds on that timeline) leave the
+ * sample reads in [T0, T1) unanswered or answer them with a wrong CRC, as
+ * a sensor that hangs or a noisy line would. At exit it tallies on stderr
+ * what the client got: reads unanswered and with a bad CRC, the counters
+ * it was answered with (first..last, how many different) and the wall
+ * time of the first sample read, so a test can check a client's counts
+ * against the sensor's own.
  */
 #define _DEFAULT_SOURCE /* cfmakeraw, openpty */
 
@@ -58,7 +65,20 @@ typedef struct {
     bool started;
     bool ended;
     int64_t served;
+    double silent[2], bad_crc[2]; /* fault windows [s] on the timeline; empty: off */
+    /* what the client was answered with (normal answers only) */
+    int64_t first_number, last_number, numbers; /* counters first..last, how many different */
+    int64_t first_read_us;                      /* wall time of the first sample read */
 } sim_t;
+
+static int64_t wall_us(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
+}
+
+static bool within(const double w[2], double t) { return w[1] > w[0] && t >= w[0] && t < w[1]; }
 
 static int64_t mono_ns(void)
 {
@@ -139,6 +159,11 @@ static void hook(void *ctx, loadid_modbus_ft_server_t *srv)
         sim->started = true;
     }
     const int64_t dt_us = (mono_ns() - sim->start_ns) / 1000;
+    if (!sim->first_read_us) sim->first_read_us = wall_us();
+    const int mode = within(sim->silent, (double)dt_us * 1e-6)    ? LOADID_MODBUS_FT_SERVER_SILENT
+                     : within(sim->bad_crc, (double)dt_us * 1e-6) ? LOADID_MODBUS_FT_SERVER_BAD_CRC
+                                                                 : LOADID_MODBUS_FT_SERVER_NORMAL;
+    loadid_modbus_ft_server_set_mode(srv, mode);
     const int64_t span = sim->s[sim->n - 1].t_us + 1;
     int64_t rel = dt_us, lap = 0;
     if (sim->constant) {
@@ -164,6 +189,22 @@ static void hook(void *ctx, loadid_modbus_ft_server_t *srv)
     if (s->saturated) regs[LOADID_MODBUS_FT_REG_STATUS] |= LOADID_MODBUS_FT_STATUS_SATURATED;
     loadid_modbus_ft_server_set_input(srv, regs);
     ++sim->served;
+    if (mode == LOADID_MODBUS_FT_SERVER_NORMAL) {
+        if (!sim->numbers) sim->first_number = number;
+        if (!sim->numbers || number != sim->last_number) ++sim->numbers;
+        sim->last_number = number;
+    }
+}
+
+/* --silent / --bad-crc T0:T1 [s], T0 < T1. */
+static int parse_window(const char *arg, double w[2])
+{
+    char *end;
+    w[0] = strtod(arg, &end);
+    if (end == arg || *end != ':') return -1;
+    arg = end + 1;
+    w[1] = strtod(arg, &end);
+    return end == arg || *end || !isfinite(w[0]) || !isfinite(w[1]) || !(w[1] > w[0]) ? -1 : 0;
 }
 
 static int parse_list(const char *arg, double *v, int n)
@@ -187,12 +228,15 @@ static void usage(FILE *f)
             "usage: loadid-modbus-sim [--wrench FX,FY,FZ,TX,TY,TZ | --recording DIR] [--config FILE]\n"
             "                         [--link PATH] [--slave ID] [--full-scale FN,TNM] [--loop]\n"
             "                         [--duration S] [--start-on-read | --epoch UTIME]\n"
+            "                         [--silent T0:T1] [--bad-crc T0:T1]\n"
             "Serves the Modbus F/T register map (proto/modbus_ft.md) on a new pty and prints\n"
             "its slave path. --wrench default 0,0,9.81,0,0,0 [N, N m]; --full-scale default\n"
             "modbus.full_scale of --config (200 N, 12 N m). The recording's timeline starts\n"
             "now, or with --start-on-read at the first sample read, or at --epoch (the wall\n"
             "time in microseconds since the epoch of its first sample, so that a test can time\n"
-            "its joint states to it); --loop repeats it.\n");
+            "its joint states to it); --loop repeats it. --silent and --bad-crc leave the sample\n"
+            "reads in [T0, T1) s of that timeline unanswered or answer them with a wrong CRC.\n"
+            "At exit stderr says what was answered (counters, the first sample read's time).\n");
 }
 
 int main(int argc, char **argv)
@@ -203,13 +247,15 @@ int main(int argc, char **argv)
         {"link", required_argument, NULL, 'k'},     {"loop", no_argument, NULL, 'l'},
         {"recording", required_argument, NULL, 'r'}, {"slave", required_argument, NULL, 's'},
         {"start-on-read", no_argument, NULL, 'S'}, {"epoch", required_argument, NULL, 'e'},
-        {"wrench", required_argument, NULL, 'w'},   {NULL, 0, NULL, 0},
+        {"wrench", required_argument, NULL, 'w'},   {"silent", required_argument, NULL, 'q'},
+        {"bad-crc", required_argument, NULL, 'b'},  {NULL, 0, NULL, 0},
     };
     const char *config = NULL, *recording = NULL, *link_path = NULL;
     double wrench[6] = {0, 0, 9.81, 0, 0, 0}, fs[2] = {0, 0}, duration = 0;
     bool have_wrench = false, have_fs = false, loop = false, start_on_read = false;
     int slave = 1, c;
     long long epoch_us = 0;
+    double silent[2] = {0, 0}, bad_crc[2] = {0, 0};
     while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
         switch (c) {
         case 'c': config = optarg; break;
@@ -232,6 +278,14 @@ int main(int argc, char **argv)
             have_fs = true;
             break;
         case 'h': usage(stdout); return 0;
+        case 'q':
+        case 'b':
+            if (parse_window(optarg, c == 'q' ? silent : bad_crc) != 0) {
+                fprintf(stderr, "loadid-modbus-sim: --%s: expected T0:T1 in seconds, T0 < T1\n",
+                        c == 'q' ? "silent" : "bad-crc");
+                return 2;
+            }
+            break;
         case 'k': link_path = optarg; break;
         case 'l': loop = true; break;
         case 'r': recording = optarg; break;
@@ -288,6 +342,8 @@ int main(int argc, char **argv)
         memcpy(sim.s[0].torque, wrench + 3, sizeof sim.s[0].torque);
     }
     sim.loop = loop;
+    memcpy(sim.silent, silent, sizeof silent);
+    memcpy(sim.bad_crc, bad_crc, sizeof bad_crc);
     sim.start_on_read = start_on_read;
     sim.constant = !recording;
 
@@ -341,8 +397,13 @@ int main(int argc, char **argv)
     }
     loadid_modbus_ft_server_stats_t st;
     loadid_modbus_ft_server_stats(srv, &st);
-    fprintf(stderr, "loadid-modbus-sim: %lld requests, %lld sample reads, %lld full-scale reads\n",
-            (long long)st.requests, (long long)st.input_reads, (long long)st.holding_reads);
+    fprintf(stderr,
+            "loadid-modbus-sim: %lld requests, %lld sample reads, %lld full-scale reads, "
+            "%lld unanswered, %lld bad CRC; counters %lld..%lld, %lld different; first sample "
+            "read at %lld us\n",
+            (long long)st.requests, (long long)st.input_reads, (long long)st.holding_reads,
+            (long long)st.silent, (long long)st.bad_crc, (long long)sim.first_number,
+            (long long)sim.last_number, (long long)sim.numbers, (long long)sim.first_read_us);
     loadid_modbus_ft_server_destroy(srv);
     close(master);
     close(slave_fd);

@@ -51,7 +51,8 @@ typedef struct {
     loadid_real_t init_sigma_acc;
     /* A step longer than this between two updates [us] restarts the
      * filters from the new measurement (a stream that stalled is not
-     * bridged by extrapolation). Default 100000 (0.1 s). */
+     * bridged by extrapolation). Default 100000 (0.1 s); the daemon sets
+     * kalman.max_joint_age_s (setup.c). */
     int64_t max_step_us;
     /* Fixed-lag smoothing (loadid_jf_lagged_state_at): the state of an
      * update is smoothed with the lag_steps updates after it, by the
@@ -98,6 +99,22 @@ int loadid_jf_state_at(const loadid_jf_t *jf, int64_t t_us, loadid_real_t *q,
 /* Time of the last accepted update [us]; INT64_MIN before the first. */
 int64_t loadid_jf_last_time(const loadid_jf_t *jf);
 
+/* After the first update and after every restart (a gap over
+ * max_step_us) the filter serves no sample from its first settle updates:
+ * it starts from its prior (qd = qdd = 0, init_sigma_*), and only
+ * once its predicted covariance of q, qd and qdd is within 1.5 times the
+ * steady state's is its mean the motion's; before, the fixed-lag
+ * smoother's steady-state gains amplify its large innovations (after a
+ * 0.3 s stall that cost RTLS 55 % of the mass). settle is the number of
+ * updates at nominal_step_us from the prior until then: 10 at jerk_psd 10
+ * and 1 kHz (the daemon's defaults). Returns it, or -EINVAL. */
+int loadid_jf_settle_steps(const loadid_jf_t *jf);
+
+/* 1 when the newest update is at least settle updates after the
+ * filter's (re)start (its state may serve a sample), else 0 (also for
+ * NULL). */
+int loadid_jf_settled(const loadid_jf_t *jf);
+
 /* With lag_steps > 0: the newest time the fixed-lag smoother can serve
  * now: 1 us before the first update of the current piece of the series
  * that has fewer than lag_steps updates after it; while the current piece
@@ -120,8 +137,9 @@ int loadid_jf_end_piece(loadid_jf_t *jf);
  * propagated by the model to t_us. Returns 0; -EINVAL (NULL
  * jf, or lag_steps 0); LOADID_E_NO_DATA (nothing yet, or that update has
  * fewer than lag_steps after it and its piece goes on); LOADID_E_STALE
- * (that update is more than max_age_us before t_us, or t_us is before
- * every kept update). Any output may be NULL. */
+ * (that update is more than max_age_us before t_us, t_us is before
+ * every kept update, or that update is one of the first settle after a
+ * (re)start: loadid_jf_settle_steps). Any output may be NULL. */
 int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, int64_t max_age_us,
                               loadid_real_t *q, loadid_real_t *qd, loadid_real_t *qdd);
 

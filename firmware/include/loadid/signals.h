@@ -17,7 +17,9 @@
  * joint quantities are evaluated at each sensor sample's time by the
  * filters' model (loadid_jf_state_at), and a sample whose nearest joint
  * state is further away than max_joint_age_us (or that comes before any
- * joint state) is refused and counted, never served from old data. With
+ * joint state) is refused and counted, never served from old data; so is
+ * one the filters would serve while still settling after their start or
+ * a restart (loadid_jf_settle_steps). With
  * the filters' lag_steps > 0 they are the fixed-lag smoother's instead
  * (loadid_jf_lagged_state_at): no lag, but a sample can be served only
  * lag_steps joint states after its time (loadid_signals_last_joint_time
