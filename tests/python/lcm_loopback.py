@@ -17,7 +17,7 @@ URL = "udpm://239.255.76.67:7667?ttl=0"
 
 
 def loopback_multicast():
-    """lo up with a multicast route (DESIGN.md "How the real parts start")."""
+    """lo up with a multicast route (docs/ARCHITECTURE.md, the live tests)."""
     subprocess.run(["ip", "link", "set", "lo", "up"], check=True)
     subprocess.run(["ip", "route", "add", "224.0.0.0/4", "dev", "lo"], check=True)
 

@@ -1,5 +1,5 @@
 """loadidd live, end to end over real LCM (UDP multicast) in a private
-network namespace (DESIGN.md "How the real parts start in tests"): the test
+network namespace (docs/ARCHITECTURE.md, the live tests): the test
 side publishes a simulated recording's joint states and commands in real
 time, the daemon reads the recording's CAN frames from the file (replayed in
 real time), and what the daemon publishes comes back: estimate_t while

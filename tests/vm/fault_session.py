@@ -3,7 +3,7 @@
 of a still robot's joint states) that loadid-replay puts on vcan0 and LCM
 one after the other while loadidd runs live (PARTS below).
 
-What each frame should do is written down here from DESIGN.md ("JR3 over
+What each frame should do is written down here from docs/INTERFACE.md ("JR3 over
 CAN") and the kernel filter of drivers/socketcan.h (the daemon's socket
 receives the standard identifiers base..base+4 only), not from the
 decoder's code: every helper adds its frames and the counts they must move.
