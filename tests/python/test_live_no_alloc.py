@@ -1,4 +1,4 @@
-"""The daemon's loop allocates nothing after start-up ,
+"""The daemon's loop allocates nothing after start-up,
 proved on the real loadidd in a whole live session over real LCM (UDP
 multicast in a private network namespace, live_session.py): joint states
 and commands over LCM, JR3 frames from --can-file, ZERO, 1.5 s of
