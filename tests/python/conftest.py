@@ -45,9 +45,12 @@ import pytest
 # The sanitizer build preloads its runtimes into pytest (tests/CMakeLists.txt)
 # so ctypes can load the sanitized core; the programs the tests start link
 # them themselves, and get LeakSanitizer back.
+# SANITIZER_PRELOAD is the environment a child Python that loads the core
+# through ctypes needs again (test_kinematics_pinocchio's isolated loader).
+SANITIZER_PRELOAD = {}
 if os.environ.pop("LOADID_PYTEST_PRELOADED", None):
-    os.environ.pop("LD_PRELOAD", None)
-    os.environ.pop("ASAN_OPTIONS", None)
+    SANITIZER_PRELOAD = {"LD_PRELOAD": os.environ.pop("LD_PRELOAD", ""),
+                         "ASAN_OPTIONS": os.environ.pop("ASAN_OPTIONS", "")}
 
 # --------------------------------------------------------------------------
 # Constants of types.h / estimator.h

@@ -31,6 +31,7 @@ from __future__ import annotations
 import ctypes
 import errno
 import math
+import os
 import re
 import subprocess
 import sys
@@ -42,6 +43,7 @@ import pinocchio as pin
 import pytest
 
 from conftest import (
+    SANITIZER_PRELOAD,
     LOADID_E_MODEL,
     LOADID_E_NONFINITE,
     LOADID_JOINT_PRISMATIC,
@@ -427,8 +429,8 @@ def load_isolated(path, base=BASE, sensor=SENSOR, timeout=20.0, max_rss=1 << 30)
     Returns (rc, message)."""
     args = [sys.executable, "-c", _ISOLATED, urdf_library_path(), str(path), base, sensor,
             str(ctypes.sizeof(LoadidChain))]
-    with subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                          text=True) as proc:
+    with subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                          env=dict(os.environ, **SANITIZER_PRELOAD)) as proc:
         t_end = time.monotonic() + timeout
         why = None
         while proc.poll() is None:
