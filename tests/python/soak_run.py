@@ -153,16 +153,22 @@ def report(s, rows=30):
              f"sessions, to t = {mem['warm']['t']:.1f} s)" if mem["warm"] else
              "memory over time (warm-up never ended: fewer than 2 sessions)")
     L.append(f"  {'t [s]':>8} {'sessions':>8} {'VmRSS kB':>9} {'RssAnon':>8} {'RssFile':>8} "
-             f"{'VmLck kB':>9} {'late':>6} {'worst us':>8}")
+             f"{'VmLck kB':>9} {'late':>6} {'worst us':>8} {'clock ms':>8}")
     for m in _every(s["memory_series"], rows):
         L.append(f"  {m['t']:>8.1f} {m['sessions']:>8} {m['VmRSS']:>9} {m['RssAnon']:>8} "
                  f"{m['RssFile']:>8} {m.get('VmLck', 0):>9} {m['late']:>6} "
-                 f"{m['late_worst_us']:>8.0f}")
+                 f"{m['late_worst_us']:>8.0f} {m['clock_ms']:>8.1f}")
+    steps = [m for m in s["memory_series"] if abs(m["clock_ms"]) > 50]
+    if steps:
+        L.append(f"  the wall clock stepped {steps[0]['clock_ms']:+.0f} ms against the monotonic "
+                 f"one by t = {steps[0]['t']:.0f} s (a VM snapshot restored?): --can-file keeps "
+                 f"the wall time of its start, so the sessions after it find no joint states "
+                 f"near their samples")
     if mem["warm"]:
         L.append(f"  VmRSS after warm-up {mem['warm']['VmRSS']} kB, at the end "
-                 f"{mem['end']['VmRSS']} kB: growth {mem['VmRSS_growth_kb']:+d} kB (target 0; at most "
-                 f"{mem['VmRSS_max_above_kb']:+d} kB above, {-mem['VmRSS_min_below_kb']:+d} below "
-                 f"on the way); RssAnon {mem['RssAnon_growth_kb']:+d} kB, RssFile "
+                 f"{mem['end']['VmRSS']} kB: growth {mem['VmRSS_growth_kb']:+d} kB (target 0; "
+                 f"at most {mem['VmRSS_max_above_kb']:+d} kB above, "
+                 f"{-mem['VmRSS_min_below_kb']:+d} below on the way); RssAnon {mem['RssAnon_growth_kb']:+d} kB, RssFile "
                  f"{mem['RssFile_growth_kb']:+d} kB; peak VmHWM {mem['peak_hwm_kb']} kB")
     ses = s["sessions"]
     L.append(f"sessions: {s['completed']} of {s['passes']} completed (4 methods' final estimates "

@@ -113,7 +113,7 @@ def feed_can(fifo, rec, passes):
             else:
                 out.append(f"({t // 1_000_000}.{t % 1_000_000:06d}){head}{(seq + add) & 255:02X}"
                            f"{tail}\n")
-        data = "".join(out).encode()
+        data = memoryview("".join(out).encode())
         while data:
             data = data[os.write(fd, data):]
     os.close(fd)
@@ -237,6 +237,7 @@ def main():
         os.sched_setscheduler(0, os.SCHED_FIFO | os.SCHED_RESET_ON_FORK,
                               os.sched_param(max(1, int(prio.group(1)) - 10)))
     memory = []
+    wall_mono0 = time.time() - time.monotonic()
     next_rss = [time.time()]
     late = {"count": 0, "worst_us": 0.0}
     tail = open(log.name)
@@ -254,8 +255,14 @@ def main():
                     late["count"], late["worst_us"] = int(m.group(1)), float(m.group(2))
             m = proc_status(daemon.pid)
             if m:
+                # clock_ms: how far the wall clock moved against the
+                # monotonic one since the start (a step, e.g. a VM snapshot
+                # restored, desynchronises --can-file's replay, which keeps
+                # the wall time of its start, from the LCM side).
+                clock_ms = (now - time.monotonic() - wall_mono0) * 1e3
                 memory.append({"t": now - epoch / 1e6, "sessions": len(models),
-                               "late": late["count"], "late_worst_us": late["worst_us"], **m})
+                               "late": late["count"], "late_worst_us": late["worst_us"],
+                               "clock_ms": clock_ms, **m})
             next_rss[0] = now + rss_every
 
     def pump(until):
@@ -293,7 +300,8 @@ def main():
         if daemon.poll() is not None:
             break
     end_input = (epoch + passes * length) / 1e6
-    pump(max(end_input, time.time()) + 1.5)  # the last window, REFINED, the save
+    if daemon.poll() is None:
+        pump(max(end_input, time.time()) + 1.5)  # the last window, REFINED, the save
     current["pass"] = passes
     next_rss[0] = 0
     each()  # the memory at the end, before SIGTERM

@@ -50,16 +50,28 @@ def test_daemon_stops_cleanly(soak):
 
 def test_every_session_completes_with_offlines_estimate(soak):
     """Every pass is a session of its own (ZERO, START, the window, DONE,
-    REFINED, the model, the saved result), and each ends with the estimate
+    REFINED, the model, the saved result), and ends with the estimate
     --offline makes of one pass: the daemon carries nothing over from one
-    session to the next that changes an estimate (1e-9 as live_lcm's
-    live-equals-offline; seen: 5e-14)."""
+    session to the next that changes an estimate. To 1e-9 (as live_lcm's
+    live-equals-offline; seen: 5e-14) in nine sessions of ten at least, and
+    to 1e-3 in all: a loop stalled 50 ms (TICK_GRACE_US, which a loaded
+    machine's kernel can do) ends the joint smoother's piece at the next
+    tick before the joint states waiting in the socket are read, and that
+    session's on-line estimates move by about 1e-4 (seen: 1.5e-4, one
+    session under ASan after a 103 ms stall). What carries over is not
+    that small: a first version of this soak that rewrote a byte of the JR3
+    full-scale frames in every pass moved the mass 0.26 % a session."""
     ses = soak["sessions"]
+    # A wall-clock step (a VM snapshot restored) desynchronises --can-file's
+    # replay from the LCM side: say so rather than fail on its effects.
+    steps = [m for m in soak["memory_series"] if abs(m["clock_ms"]) > 50]
+    assert not steps, f"the wall clock stepped during the soak: {steps[0]}"
     assert soak["passes"] >= SECONDS / soak["pass_s"]
     assert soak["completed"] == soak["passes"], [s for s in ses if not s["complete"]][:3]
+    worst = [max(s[m]["offline_rel"] for m in soak_run.METHODS.values()) for s in ses]
+    assert sum(w < 1e-9 for w in worst) >= 0.9 * len(ses), worst
+    assert max(worst) < 1e-3, worst
     for s in ses:
-        for m in soak_run.METHODS.values():
-            assert s[m]["offline_rel"] < 1e-9, (s["pass"], m, s[m]["offline_rel"])
         # And sane on its own: the simulated load's mass (1 kg) within 3 %
         # and its COM within 5 mm (seen: -0.19 % and 0.07 mm for RTLS).
         assert abs(s["RTLS"]["mass_err"]) < 0.03 and s["RTLS"]["com_err_mm"] < 5, s["RTLS"]
