@@ -25,7 +25,7 @@
  * (worker.h); its end comes in as one more fd of the epoll set.
  *
  * After start-up (the first epoll_wait) the loop allocates nothing
- * (STYLE.md rule 5; tests/python/test_live_no_alloc.py proves it under an
+ * (tests/python/test_live_no_alloc.py proves it under an
  * allocation-counting LD_PRELOAD): messages are encoded and decoded by
  * drivers/lcm_wire.h on static buffers, and on udpm:// (the provider in
  * use) sent and received by drivers/lcm_udpm.h on the daemon's own two
@@ -64,6 +64,7 @@
 #include "saved_result.h"
 
 #define HIST_BINS 20001 /* 0.5 us bins up to 10 ms; the last holds the rest */
+#define LATE_US 1000.0  /* a sample handled later than this after arrival missed its deadline */
 
 _Static_assert(LOADID_LCM_MAX_JOINTS == LOADID_MAX_JOINTS, "joint_state_t holds every joint");
 _Static_assert(LOADID_LCM_NAME_MAX == LOADID_LOAD_NAME_MAX, "load_name fits both ways");
@@ -105,6 +106,12 @@ typedef struct {
     int64_t can_drops;            /* frames the kernel dropped, over every socket */
     int64_t can_drops_logged, can_drops_frames; /* logged so far; frames read when last grown */
     double can_drops_warned_us;   /* throttles their log line */
+    int64_t samples_late;         /* handled more than LATE_US after arrival */
+    double late_max_us;           /* the worst lateness of any sample */
+    int late_seq;                 /* file: the JR3 sequence byte of the last
+                                     sample counted late, or -1 */
+    int64_t late_logged;          /* samples_late at the last log line */
+    double late_warned_us;        /* throttles that line */
     loadid_modbus_input_t *ft;    /* sensor.type modbus, else NULL */
     int64_t ft_connected;         /* the poller's last reported state */
     uint32_t hist[HIST_BINS];
@@ -238,7 +245,7 @@ static void publish_status(live_t *L, int periodic, int state, int64_t utime) {
     m.frames_bad = st.frames_bad + L->error_frames;
     m.samples_incomplete = st.samples_incomplete;
     /* status_t has no field for faults: a sample saturated or faulty (or
-     * both, counted once) never reaches an estimator (DESIGN.md). */
+     * both, counted once) never reaches an estimator (docs/INTERFACE.md). */
     m.samples_saturated = st.samples_rejected;
     m.sequence_gaps = st.sequence_gaps;
     if (L->ft) {
@@ -398,9 +405,32 @@ static void read_socket(live_t *L) {
     }
 }
 
+/* Deadlines: late_us is how long after its arrival a sample was handled
+ * (taken in by the pipeline: decoded, counted, queued for the joint data
+ * the fixed-lag smoother waits for, which is by design and not lateness).
+ * new_sample 0: a later frame of a sample already counted late. More than
+ * LATE_US is a missed deadline: counted, logged at most once a second
+ * while the count grows, and in --verbose's summary with the worst. */
+static void note_lateness(live_t *L, double late_us, int new_sample, double now_mono) {
+    if (late_us > L->late_max_us) L->late_max_us = late_us;
+    if (late_us <= LATE_US || !new_sample) return;
+    L->samples_late++;
+    if (now_mono - L->late_warned_us >= 1e6) {
+        fprintf(stderr, "loadidd: %lld samples handled more than %.0f ms after arrival so far "
+                        "(%lld new, worst %.0f us)\n", (long long)L->samples_late, LATE_US / 1e3,
+                (long long)(L->samples_late - L->late_logged), L->late_max_us);
+        L->late_logged = L->samples_late;
+        L->late_warned_us = now_mono;
+    }
+}
+
+/* Modbus: a sample arrives when the poller got the sensor's answer (its
+ * t_us, CLOCK_REALTIME). */
 static void on_ft_sample(void *ctx, const loadid_modbus_ft_sample_t *s) {
     live_t *L = ctx;
     loadid_pipeline_ft_sample(L->pipe, s->t_us, s->force, s->torque, s->saturated, s->faulty);
+    const int64_t now = wall_us();
+    note_lateness(L, (double)(now - s->t_us), 1, mono_us());
 }
 
 /* Once a second: say when the serial sensor was lost or came back (both
@@ -418,7 +448,9 @@ static void watch_ft(live_t *L) {
 }
 
 /* File source: feeds every frame due by now, then arms the timer for the
- * next one. */
+ * next one. A sample's frames arrive when they are due; a sample is late
+ * when one of them is handled more than LATE_US after (the JR3 sequence
+ * byte tells its frames apart from the next sample's). */
 static void read_file(live_t *L, int timer_fd) {
     const double now = mono_us();
     while (L->have_next) {
@@ -427,6 +459,14 @@ static void read_file(live_t *L, int timer_fd) {
         loadid_can_frame_t f = L->next;
         f.t_us = L->wall_t0 + (L->next.t_us - L->file_t0);
         loadid_pipeline_can_frame(L->pipe, &f);
+        if (!f.extended && f.id >= L->cfg->can_base_id && f.id <= L->cfg->can_base_id + 3 &&
+            f.dlc == 8) {
+            const double handled = mono_us();
+            const int seq = f.data[6], late = handled - due > LATE_US;
+            note_lateness(L, handled - due, seq != L->late_seq, handled);
+            if (late) L->late_seq = seq;
+            else if (seq != L->late_seq) L->late_seq = -1;
+        }
         int rc;
         while ((rc = loadid_candump_read(L->can_reader, &L->next, NULL)) < 0 && rc != -EIO)
             loadid_pipeline_bad_frame(L->pipe);
@@ -502,6 +542,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     L.can_fd = -1;
     L.lcm_rx_fd = -1;
     L.lcm_tx.fd = -1;
+    L.late_seq = -1;
     char err[512];
     loadid_pipeline_sink_t sink = {.ctx = &L, .estimate = on_estimate, .wrench = on_wrench,
                                    .state = on_state, .log = on_log};
@@ -709,6 +750,10 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                 (long long)st.joint_msgs_bad, (long long)st.samples_stale,
                 (long long)L.can_errors, (long long)L.can_drops, (long long)L.error_frames,
                 (long long)L.commands_refused);
+        if (opt->can_file || L.ft) /* measured there (SocketCAN: not yet) */
+            fprintf(stderr, "loadidd: samples late %lld (handled more than %.0f ms after "
+                            "arrival), worst lateness %.0f us\n",
+                    (long long)L.samples_late, LATE_US / 1e3, L.late_max_us);
         loadid_modbus_input_stats_t ms;
         if (L.ft && loadid_modbus_input_stats(L.ft, &ms) == 0)
             fprintf(stderr,
