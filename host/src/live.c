@@ -737,6 +737,8 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         if (stop) break;
     }
     loadid_notify_stopping();
+    /* A loss or a reopen since the last once-a-second look is said too. */
+    if (L.ft) watch_ft(&L);
     if (opt->verbose) {
         loadid_pipeline_status_t st;
         loadid_pipeline_status(L.pipe, &st);

@@ -133,7 +133,9 @@ def test_sensor_lost_and_found_counted_as_it_happened(session, capsys):
     assert 0 <= late <= 2, (d, b)
     assert d["bad frames"] == d["CRC"] == b["bad_crc"], (d, b)
     assert d["exceptions"] == d["malformed"] == d["rejected"] == 0, d
-    assert sum(t["different"] for t in (a, b, c)) - late <= d["samples ok"] <= \
+    # - 1: the read in flight when the daemon stops can be answered (the
+    # sensor counts it) and never handed over (seen once in 4 runs).
+    assert sum(t["different"] for t in (a, b, c)) - late - 1 <= d["samples ok"] <= \
         sum(t["different"] for t in (a, b, c)), (d, a, b, c)
     gaps = sum(t["last"] - t["first"] + 1 - t["different"] for t in (a, b, c))
     assert gaps <= d["gaps"] <= gaps + late, (d["gaps"], gaps)
