@@ -132,6 +132,7 @@ def summarize(out, rec, offline=None):
     return {"passes": passes, "pass_s": out["pass_us"] / 1e6, "sessions": sessions,
             "completed": sum(s["complete"] for s in sessions), "memory": memory,
             "memory_series": mem, "loop": loop, "late": late, "machine": out.get("machine"),
+            "publisher": out.get("publisher"),
             "counters": counters, "returncode": out["returncode"],
             "wrench_nonfinite": out["wrench"]["nonfinite"], "wrench_n": out["wrench"]["n"]}
 
@@ -168,8 +169,9 @@ def report(s, rows=30):
         L.append(f"  VmRSS after warm-up {mem['warm']['VmRSS']} kB, at the end "
                  f"{mem['end']['VmRSS']} kB: growth {mem['VmRSS_growth_kb']:+d} kB (target 0; "
                  f"at most {mem['VmRSS_max_above_kb']:+d} kB above, "
-                 f"{-mem['VmRSS_min_below_kb']:+d} below on the way); RssAnon {mem['RssAnon_growth_kb']:+d} kB, RssFile "
-                 f"{mem['RssFile_growth_kb']:+d} kB; peak VmHWM {mem['peak_hwm_kb']} kB")
+                 f"{-mem['VmRSS_min_below_kb']:+d} below on the way); RssAnon "
+                 f"{mem['RssAnon_growth_kb']:+d} kB, RssFile {mem['RssFile_growth_kb']:+d} kB; "
+                 f"peak VmHWM {mem['peak_hwm_kb']} kB")
     ses = s["sessions"]
     L.append(f"sessions: {s['completed']} of {s['passes']} completed (4 methods' final estimates "
              f"of 1500 samples, the load model, the saved result)")
@@ -213,6 +215,10 @@ def report(s, rows=30):
     L.append(f"deadlines: {late['count']} samples handled more than 1 ms after arrival, worst "
              f"lateness {late['worst_us']} us" if late else
              "deadlines: no figure (the daemon's summary lacks it)")
+    pub = s["publisher"]
+    if pub:
+        L.append(f"the publisher of the joint states: at worst {pub['worst_late_ms']:.1f} ms late "
+                 f"(pass {pub['worst_pass']})")
     mc = s["machine"]
     if mc:
         L.append(f"the machine meanwhile: a bare 1 ms timer at "

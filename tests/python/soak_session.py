@@ -285,12 +285,18 @@ def main():
         elif channel == "LOADID_COMMAND":
             plan.append((t, channel, None, types.command_t.decode(data)))
     shift0 = epoch - first_can
+    # How late the publisher itself got (a joint stream held up 50 ms ends
+    # the daemon's smoother piece, as a real controller's would).
+    publisher = {"worst_late_ms": 0.0, "worst_pass": -1}
     for k in range(passes):
         current["pass"] = k
         shift = shift0 + k * length
         for t, channel, data, cmd in plan:
             due = t + shift
             pump(due / 1e6)
+            late_ms = (time.time() - due / 1e6) * 1e3
+            if late_ms > publisher["worst_late_ms"]:
+                publisher["worst_late_ms"], publisher["worst_pass"] = late_ms, k
             if cmd is None:
                 lc.publish(channel, data[:8] + struct.pack(">q", due) + data[16:])
             else:
@@ -323,6 +329,7 @@ def main():
     print(json.dumps({
         "returncode": rc, "passes": passes, "pass_us": length, "epoch": epoch,
         "log": os.path.join(work, "loadidd.log"), "memory_kb": memory, "machine": machine,
+        "publisher": publisher,
         "status": status, "status_fields": list(STATUS_FIELDS) + ["received"],
         "final": final, "models": models, "saved": saved,
         "wrench": {"n": wrench["n"], "nonfinite": wrench["nonfinite"],

@@ -53,14 +53,15 @@ def test_every_session_completes_with_offlines_estimate(soak):
     REFINED, the model, the saved result), and ends with the estimate
     --offline makes of one pass: the daemon carries nothing over from one
     session to the next that changes an estimate. To 1e-9 (as live_lcm's
-    live-equals-offline; seen: 5e-14) in nine sessions of ten at least, and
-    to 1e-3 in all: a loop stalled 50 ms (TICK_GRACE_US, which a loaded
-    machine's kernel can do) ends the joint smoother's piece at the next
-    tick before the joint states waiting in the socket are read, and that
-    session's on-line estimates move by about 1e-4 (seen: 1.5e-4, one
-    session under ASan after a 103 ms stall). What carries over is not
-    that small: a first version of this soak that rewrote a byte of the JR3
-    full-scale frames in every pass moved the mass 0.26 % a session."""
+    live-equals-offline; seen: 6e-14 over an hour) unless the loop or the
+    joint states' publisher was held up 40 ms or more: 50 ms
+    (TICK_GRACE_US) ends the joint smoother's piece at the next tick, also
+    when the loop, not the joint stream, was late (the joint states still
+    wait in the socket), and that session's on-line estimates move by about
+    1e-4 (seen: up to 5.3e-4 on a machine loaded by fuzzers). Then to 1e-3,
+    which still catches what carries over: a first version of this soak
+    that rewrote a byte of the JR3 full-scale frames in every pass moved the
+    mass 0.26 % a session."""
     ses = soak["sessions"]
     # A wall-clock step (a VM snapshot restored) desynchronises --can-file's
     # replay from the LCM side: say so rather than fail on its effects.
@@ -69,8 +70,8 @@ def test_every_session_completes_with_offlines_estimate(soak):
     assert soak["passes"] >= SECONDS / soak["pass_s"]
     assert soak["completed"] == soak["passes"], [s for s in ses if not s["complete"]][:3]
     worst = [max(s[m]["offline_rel"] for m in soak_run.METHODS.values()) for s in ses]
-    assert sum(w < 1e-9 for w in worst) >= 0.9 * len(ses), worst
-    assert max(worst) < 1e-3, worst
+    held_up = soak["late"]["worst_us"] >= 40e3 or soak["publisher"]["worst_late_ms"] >= 40
+    assert max(worst) < (1e-3 if held_up else 1e-9), (soak["late"], soak["publisher"], worst)
     for s in ses:
         # And sane on its own: the simulated load's mass (1 kg) within 3 %
         # and its COM within 5 mm (seen: -0.19 % and 0.07 mm for RTLS).
