@@ -108,8 +108,6 @@ typedef struct {
     double can_drops_warned_us;   /* throttles their log line */
     int64_t samples_late;         /* handled more than LATE_US after arrival */
     double late_max_us;           /* the worst lateness of any sample */
-    int late_seq;                 /* file: the JR3 sequence byte of the last
-                                     sample counted late, or -1 */
     int64_t late_logged;          /* samples_late at the last log line */
     double late_warned_us;        /* throttles that line */
     loadid_modbus_input_t *ft;    /* sensor.type modbus, else NULL */
@@ -408,13 +406,13 @@ static void read_socket(live_t *L) {
 /* Deadlines: late_us is how long after its arrival a sample was handled
  * (taken in by the pipeline: decoded, counted, queued for the joint data
  * the fixed-lag smoother waits for, which is by design and not lateness).
- * new_sample 0: a later frame of a sample already counted late. More than
- * LATE_US is a missed deadline: counted, logged at most once a second
- * while the count grows, and in --verbose's summary with the worst. */
-static void note_lateness(live_t *L, double late_us, int new_sample, double now_mono) {
+ * More than LATE_US is a missed deadline: counted, logged at most once a
+ * second while the count grows, and in --verbose's summary with the worst. */
+static void note_lateness(live_t *L, double late_us) {
     if (late_us > L->late_max_us) L->late_max_us = late_us;
-    if (late_us <= LATE_US || !new_sample) return;
+    if (late_us <= LATE_US) return;
     L->samples_late++;
+    const double now_mono = mono_us();
     if (now_mono - L->late_warned_us >= 1e6) {
         fprintf(stderr, "loadidd: %lld samples handled more than %.0f ms after arrival so far "
                         "(%lld new, worst %.0f us)\n", (long long)L->samples_late, LATE_US / 1e3,
@@ -429,8 +427,7 @@ static void note_lateness(live_t *L, double late_us, int new_sample, double now_
 static void on_ft_sample(void *ctx, const loadid_modbus_ft_sample_t *s) {
     live_t *L = ctx;
     loadid_pipeline_ft_sample(L->pipe, s->t_us, s->force, s->torque, s->saturated, s->faulty);
-    const int64_t now = wall_us();
-    note_lateness(L, (double)(now - s->t_us), 1, mono_us());
+    note_lateness(L, (double)(wall_us() - s->t_us));
 }
 
 /* Once a second: say when the serial sensor was lost or came back (both
@@ -448,9 +445,7 @@ static void watch_ft(live_t *L) {
 }
 
 /* File source: feeds every frame due by now, then arms the timer for the
- * next one. A sample's frames arrive when they are due; a sample is late
- * when one of them is handled more than LATE_US after (the JR3 sequence
- * byte tells its frames apart from the next sample's). */
+ * next one. A sample arrives when the frame that completes it is due. */
 static void read_file(live_t *L, int timer_fd) {
     const double now = mono_us();
     while (L->have_next) {
@@ -458,15 +453,7 @@ static void read_file(live_t *L, int timer_fd) {
         if (due > now) break;
         loadid_can_frame_t f = L->next;
         f.t_us = L->wall_t0 + (L->next.t_us - L->file_t0);
-        loadid_pipeline_can_frame(L->pipe, &f);
-        if (!f.extended && f.id >= L->cfg->can_base_id && f.id <= L->cfg->can_base_id + 3 &&
-            f.dlc == 8) {
-            const double handled = mono_us();
-            const int seq = f.data[6], late = handled - due > LATE_US;
-            note_lateness(L, handled - due, seq != L->late_seq, handled);
-            if (late) L->late_seq = seq;
-            else if (seq != L->late_seq) L->late_seq = -1;
-        }
+        if (loadid_pipeline_can_frame(L->pipe, &f)) note_lateness(L, mono_us() - due);
         int rc;
         while ((rc = loadid_candump_read(L->can_reader, &L->next, NULL)) < 0 && rc != -EIO)
             loadid_pipeline_bad_frame(L->pipe);
@@ -542,7 +529,6 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     L.can_fd = -1;
     L.lcm_rx_fd = -1;
     L.lcm_tx.fd = -1;
-    L.late_seq = -1;
     char err[512];
     loadid_pipeline_sink_t sink = {.ctx = &L, .estimate = on_estimate, .wrench = on_wrench,
                                    .state = on_state, .log = on_log};

@@ -907,23 +907,26 @@ static void flush_pending(loadid_pipeline_t *p, int64_t before, int ready) {
 
 static void enqueue(loadid_pipeline_t *p, const loadid_jr3_sample_t *s);
 
-void loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame) {
+int loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame) {
     loadid_jr3_output_t out;
     const int rc = loadid_jr3_decoder_feed(p->jr3, frame, &out);
     if (rc == LOADID_JR3_SAMPLE) {
         enqueue(p, &out.sample);
+        return 1;
     } else if (rc == LOADID_JR3_E_SATURATED || rc == LOADID_JR3_E_FAULT) {
         /* Refused (counted by the decoder), but it takes its place in the
          * queue: the window's completeness counts it, in time order. */
         out.sample.saturated = out.sample.saturated || rc == LOADID_JR3_E_SATURATED;
         out.sample.faulty = out.sample.faulty || rc == LOADID_JR3_E_FAULT;
         enqueue(p, &out.sample);
+        return 1;
     } else if (rc == LOADID_JR3_FULL_SCALE) {
         const loadid_jr3_full_scale_change_t *c = &out.full_scale;
         note(p, "JR3 %s full scale now %g %g %g (was %g %g %g)", loadid_jr3_group_name(c->group),
              c->current[0], c->current[1], c->current[2], c->previous[0], c->previous[1],
              c->previous[2]);
     }
+    return 0;
 }
 
 /* A JR3 sample's queue slot, so that both sensors share one path. */

@@ -143,7 +143,9 @@ void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_jo
                                  const double *position, const double *setpoint);
 void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
                              const char *load_name);
-void loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame);
+/* Returns 1 when the frame completed a JR3 sample (usable or refused as
+ * saturated or faulty), else 0: the live loop times a sample from it. */
+int loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame);
 /* One already-decoded F/T sample from a sensor without an accelerometer
  * (the Modbus F/T of drivers/modbus_ft.h): t_us its time [us, the clock of
  * the joint states], force [N] and torque [N m] in S. It takes the JR3
