@@ -507,14 +507,21 @@ static void advance(loadid_pipeline_t *p, int64_t utime) {
  * after its end, so that a window normally ends by its samples' own times
  * (as offline) and by the clock only when samples stop coming. */
 #define TICK_GRACE_US 50000
-void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us) {
-    const int64_t grace = TICK_GRACE_US + llround(p->cfg.kalman_lag_s * 1e6);
-    /* Joint states stopped coming: the smoother serves what it has. */
+
+/* Joint states stopped coming TICK_GRACE_US before now_us (the clock's, or
+ * a sample's own time): the smoother serves what it has, before the queue
+ * fills and serves samples it could have smoothed. */
+static void end_stalled_piece(loadid_pipeline_t *p, int64_t now_us) {
     const int64_t newest = loadid_signals_newest_joint_time(p->sig);
     if (newest != INT64_MIN && newest < now_us - TICK_GRACE_US) {
         loadid_signals_end_piece(p->sig);
         flush_pending(p, INT64_MIN, 1);
     }
+}
+
+void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us) {
+    const int64_t grace = TICK_GRACE_US + llround(p->cfg.kalman_lag_s * 1e6);
+    end_stalled_piece(p, now_us);
     flush_pending(p, now_us - grace, 0); /* joints stopped: serve (or refuse) them */
     advance(p, now_us - grace);
 }
@@ -931,14 +938,7 @@ int loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *fr
 
 /* A JR3 sample's queue slot, so that both sensors share one path. */
 static void enqueue(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
-    /* The joint stream stalled (by the samples' own clock, so offline as
-     * live): the smoother serves what came, as loadid_pipeline_tick does,
-     * before the queue fills and serves samples it could have smoothed. */
-    const int64_t newest = loadid_signals_newest_joint_time(p->sig);
-    if (newest != INT64_MIN && s->t_us - newest > TICK_GRACE_US) {
-        loadid_signals_end_piece(p->sig);
-        flush_pending(p, INT64_MIN, 1);
-    }
+    end_stalled_piece(p, s->t_us); /* by the samples' own clock: offline as live */
     if (p->pending_count == PENDING_MAX) pop_pending(p); /* joints this late: serve it now */
     p->pending[(p->pending_head + p->pending_count) % PENDING_MAX] = *s;
     p->pending_count++;
