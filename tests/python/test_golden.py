@@ -17,7 +17,7 @@ import subprocess
 import numpy as np
 
 from accuracy import BOUNDS, assert_accuracy
-from recordings import program
+from recordings import program, read_truth
 
 GOLDEN = pathlib.Path(__file__).resolve().parents[1] / "data" / "golden"
 RTOL = 1e-9
@@ -59,10 +59,7 @@ def test_golden_recording_gives_the_committed_result(tmp_path):
     compare(got, want)
     # And the committed result itself is a good one (so that a wrong
     # update_golden.sh run cannot bless a broken estimate).
-    truth = None
-    for line in (GOLDEN / "truth.yaml").read_text().splitlines():
-        if line.startswith("  phi:") and truth is None:
-            truth = np.array(json.loads(line.split(":", 1)[1]))
+    truth = np.array(json.loads(read_truth(GOLDEN)["load.phi"]))
     for e in want:
         assert e["complete"] is True and e["samples"] == 1500
         assert_accuracy(e, truth, **BOUNDS["default"])

@@ -29,6 +29,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests" / "python"))
 
 from accuracy import VCAN_LAG_US, load_errors  # noqa: E402
+from recordings import read_truth  # noqa: E402
 
 ALL = "  methods: [RTLS, RIV, RLS, TLS_BATCH, REFINED]\n"
 DISTAL = [0.3, 0.0, 0.0, 0.006, 2e-4, 0.0, 0.0, 2e-4, 0.0, 1e-4]
@@ -96,12 +97,7 @@ def survey(build: pathlib.Path, name: str, seeds: int, work: pathlib.Path) -> di
 
 
 def truth_phi(rec):
-    """load.phi of truth.yaml (the line after "load:")."""
-    lines = (rec / "truth.yaml").read_text().splitlines()
-    for k, line in enumerate(lines[:-1]):
-        if line == "load:" and lines[k + 1].startswith("  phi:"):
-            return np.array(json.loads(lines[k + 1].split(":", 1)[1]))
-    raise RuntimeError(f"{rec}: no load.phi in truth.yaml")
+    return np.array(json.loads(read_truth(rec)["load.phi"]))
 
 
 def main() -> int:
