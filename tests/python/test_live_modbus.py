@@ -133,12 +133,14 @@ def test_sensor_lost_and_found_counted_as_it_happened(session, capsys):
     assert 0 <= late <= 2, (d, b)
     assert d["bad frames"] == d["CRC"] == b["bad_crc"], (d, b)
     assert d["exceptions"] == d["malformed"] == d["rejected"] == 0, d
-    # - 1: the read in flight when the daemon stops can be answered (the
-    # sensor counts it) and never handed over (seen once in 4 runs).
-    assert sum(t["different"] for t in (a, b, c)) - late - 1 <= d["samples ok"] <= \
+    # The read in flight when the daemon stops can be answered (the sensor
+    # counts it, and the gap before it) and never handed over: one sample
+    # and its gap may be missing (seen in 2 of about 10 runs under load).
+    inflight = 1
+    assert sum(t["different"] for t in (a, b, c)) - late - inflight <= d["samples ok"] <= \
         sum(t["different"] for t in (a, b, c)), (d, a, b, c)
     gaps = sum(t["last"] - t["first"] + 1 - t["different"] for t in (a, b, c))
-    assert gaps <= d["gaps"] <= gaps + late, (d["gaps"], gaps)
+    assert gaps - inflight <= d["gaps"] <= gaps + late, (d["gaps"], gaps)
     last = session["status"][-1]  # published at exit, after the summary
     assert last["samples_incomplete"] == d["timeouts"] > 0, last
     assert last["frames_bad"] == d["bad frames"] > 0, last
