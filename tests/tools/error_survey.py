@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import pathlib
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -45,6 +47,10 @@ SCENARIOS = {
                  "bad-frames=0.02")},
     "vcan": ("estimation:\n  methods: [RTLS, RIV, RLS, REFINED]\nkalman:\n"
              "  max_joint_age_s: 0.02\n", None, []),
+    # test_live_modbus.py's whole live session (its own configuration: the
+    # serial sensor polled at 500 Hz, signals kf, the sensor lost and found,
+    # reads unanswered and bad CRCs), run live per seed in a network namespace.
+    "modbus": (None, None, []),
 }
 # name: how late the daemon gets the JR3 frames [us] (the vcan VM's live
 # daemon: accuracy.py VCAN_LAG_US).
@@ -70,7 +76,7 @@ def run(args, **kw):
 def survey(build: pathlib.Path, name: str, seeds: int, work: pathlib.Path) -> dict:
     cfg_text, sim_cfg, extra = SCENARIOS[name]
     cfg = work / f"{name}.yaml"
-    cfg.write_text(cfg_text)
+    cfg.write_text(cfg_text or "")
     out = {}
     for seed in range(1, seeds + 1):
         rec = work / f"{name}-{seed}"
@@ -82,6 +88,13 @@ def survey(build: pathlib.Path, name: str, seeds: int, work: pathlib.Path) -> di
         if name in DELAY_CAN_US:
             delay_can(rec, DELAY_CAN_US[name])
         truth = truth_phi(rec)
+        if name == "modbus":
+            for est in modbus_finals(rec, work / f"{name}-{seed}-session"):
+                e = load_errors(est["phi"], truth)
+                out.setdefault(METHOD_NAMES[est["method"]], []).append(
+                    (e["mass_pct"], e["com_mm"], e["moment_pct"]))
+            shutil.rmtree(rec)
+            continue
         r = subprocess.run([str(build / "host/loadidd"), "--config", str(cfg), "--offline",
                             str(rec)], capture_output=True, text=True, timeout=600)
         if r.returncode != 0:
@@ -96,6 +109,34 @@ def survey(build: pathlib.Path, name: str, seeds: int, work: pathlib.Path) -> di
     return {m: np.array(v) for m, v in out.items()}
 
 
+METHOD_NAMES = {1: "RLS", 2: "RIV", 3: "RTLS"}  # estimate_t.method
+
+
+def modbus_finals(rec: pathlib.Path, d: pathlib.Path) -> list:
+    """The final (DONE) estimates of test_live_modbus.py's live session on
+    the recording rec, its files in the folder d."""
+    from test_live_modbus import DONE, run_modbus_session
+    d.mkdir()
+    s = run_modbus_session(rec, d)
+    shutil.rmtree(d)
+    if s["returncode"] != 0:
+        raise RuntimeError(f"modbus session on {rec}: {s['stderr']}")
+    finals = [e for e in s["estimate"] if e["state"] == DONE]
+    if sorted(e["method"] for e in finals) != [1, 2, 3]:
+        raise RuntimeError(f"modbus session on {rec}: finals {finals}: {s['stderr']}")
+    return finals
+
+
+def program_environment(build: pathlib.Path) -> None:
+    """The programs' paths as ctest gives them to the Python tests (the
+    live Modbus session reads them)."""
+    for var, rel in (("LOADIDD_EXE", "host/loadidd"),
+                     ("LOADID_MODBUS_SIM_EXE", "tools/loadid-modbus-sim"),
+                     ("LOADID_LCM_PYTHON_DIR", "proto/python"),
+                     ("LOADID_CORE_LIB", "firmware/libloadid_core.so")):
+        os.environ.setdefault(var, str(build / rel))
+
+
 def truth_phi(rec):
     return np.array(json.loads(read_truth(rec)["load.phi"]))
 
@@ -107,6 +148,7 @@ def main() -> int:
     ap.add_argument("--scenario", action="append", choices=sorted(SCENARIOS))
     a = ap.parse_args()
     build = pathlib.Path(a.build).resolve()
+    program_environment(build)
     names = a.scenario or list(SCENARIOS)
     with tempfile.TemporaryDirectory(prefix="error_survey.") as d:
         work = pathlib.Path(d)
