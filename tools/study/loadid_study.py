@@ -701,7 +701,8 @@ def reference(rec: pathlib.Path, build: pathlib.Path, gravity=GRAVITY,
 # --------------------------------------------------------------------------
 # Running the shipped programs
 # --------------------------------------------------------------------------
-PROGRAMS = {"traj": "tools/loadid-traj", "sim": "tools/loadid-sim", "loadidd": "host/loadidd"}
+PROGRAMS = {"traj": "tools/loadid-traj", "sim": "tools/loadid-sim", "loadidd": "host/loadidd",
+            "kappa": "tools/loadid-kappa"}
 RETRY_WAIT_S = 5.0
 RETRY_FOR_S = 900.0
 
@@ -1287,7 +1288,9 @@ def main(argv=None) -> int:
                     "independent batch-TLS reference computed from each recording (numpy, "
                     "Pinocchio).",
         epilog="Loads: " + "; ".join([f"o1 (the paper's)"] + [f"{k}: {v[0]}, {v[2]:g} kg"
-                                                             for k, v in SOLIDS.items()])
+                                                             for k, v in SOLIDS.items()]
+                                     + [f"{k} (the paper's, not in the default set): {v[0]}, "
+                                        f"{load_phi(k)[0]:.2f} kg" for k, v in BLOCKS.items()])
         + ". Noise cells: low, paper, high (simulated F/T and accelerometer noise), wrong3x "
           "(paper noise, estimator told 1/3 of it), vibration (paper noise, vibration 1.0 m/s^2 "
           "and 15 rad/s^2), clean (no noise, no vibration; not in the default set).")
@@ -1317,12 +1320,32 @@ def main(argv=None) -> int:
     ap.add_argument("--keep", action="store_true",
                     help="keep the recordings (about 1 MB each) and loadidd's estimate traces "
                          "(results/*.trace.csv, about 0.2 MB each)")
+    ap.add_argument("--paper", action="store_true",
+                    help="the paper's experiments (sec. V): loads o1, o2, o3, trajectories tr1 and "
+                         "tr2, every signal source and method, 20 seeds (--seeds to change); "
+                         "writes runs.csv, Table I, the figures (PNG) and report.md into --out "
+                         "(see tools/study/paper_study.py)")
+    ap.add_argument("--replot", action="store_true",
+                    help="with --paper: make the figures and report.md again from --out's "
+                         "summary.json and traces, without running anything")
     ap.add_argument("--self-test", action="store_true",
                     help="check the geometry, regressor, smoother, TLS and JR3 decoding of this "
                          "program against independent computations, and exit")
     a = ap.parse_args(argv)
     if a.self_test:
         return self_test()
+    if a.paper:
+        given = [o for o, v in (("--robots", a.robots), ("--loads", a.loads), ("--noise", a.noise),
+                                ("--methods", a.methods), ("--signals", a.signals),
+                                ("--lag", a.lag), ("--jerk-psd", a.jerk_psd), ("--quick", a.quick))
+                 if v]
+        if given:
+            raise SystemExit(f"loadid-study: --paper runs the paper's own grid; {', '.join(given)} "
+                             "do not apply")
+        import paper_study
+        return paper_study.replot(a) if a.replot else paper_study.main(a)
+    if a.replot:
+        raise SystemExit("loadid-study: --replot needs --paper")
 
     began = time.monotonic()
     robots = parse_list(a.robots or ("rx60" if a.quick else ",".join(ROBOTS)), ROBOTS, "robot")
