@@ -220,6 +220,10 @@ def fig_ratios(out, summary, meta):
     plt.close(fig)
 
 
+def _f2(x):
+    return "-" if x is None else f"{x:.2f}"
+
+
 def fig_table1(out, summary, meta, paper_table):
     head = ["trajectory", "load", "kappa_set", "kappa_sens\nmedian [min, max]",
             "kappa_kf\nmedian", "kappa_design", "paper\nkappa_set", "paper\nkappa_sens"]
@@ -227,9 +231,9 @@ def fig_table1(out, summary, meta, paper_table):
     for k in summary["kappa"]:
         p = paper_table.get((k["trajectory"], k["load"]))
         ks = k["kappa_sens"]
-        body.append([k["trajectory"], k["load"], f"{k['kappa_set']['median']:.2f}",
-                     f"{ks['median']:.2f} [{ks['min']:.2f}, {ks['max']:.2f}]",
-                     f"{k['kappa_kf']['median']:.2f}",
+        body.append([k["trajectory"], k["load"], _f2(k["kappa_set"]["median"]),
+                     f"{_f2(ks['median'])} [{_f2(ks['min'])}, {_f2(ks['max'])}]",
+                     _f2(k["kappa_kf"]["median"]),
                      f"{meta['trajectories'][k['trajectory']].get('kappa_design', math.nan):.3f}",
                      f"{p[0]:.2f}" if p else "-", f"{p[1]:.2f}" if p else "-"])
     fig, ax = plt.subplots(figsize=(10, 0.4 * len(body) + 0.9))

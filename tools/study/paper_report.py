@@ -91,8 +91,10 @@ def numbers(summary, meta) -> dict:
         rtls_mass_worst_cell=max(rtls_mass.items(), key=lambda kv: kv[1] if kv[1] is not None
                                  else -1),
         kappa_set=[t["kappa_set"] for t in table1],
-        kappa_sens_min=min(t["kappa_sens_min"] for t in table1),
-        kappa_sens_max=max(t["kappa_sens_max"] for t in table1))
+        kappa_sens_min=min((t["kappa_sens_min"] for t in table1
+                            if t["kappa_sens_min"] is not None), default=None),
+        kappa_sens_max=max((t["kappa_sens_max"] for t in table1
+                            if t["kappa_sens_max"] is not None), default=None))
     return dict(seeds=meta["seeds"], headline=head, fig6=fig6, fig7=fig7, fig9=fig9,
                 table1=table1, wins=wins(summary, meta), rtls_mass_median=rtls_mass)
 
