@@ -71,12 +71,6 @@ def grouped_bars(ax, series, colors, labels, annotate=None):
         ax.bar(xs, med, width, color=colors[name], label=labels[name], zorder=2)
         ax.errorbar(xs, med, yerr=[np.zeros_like(med), np.clip(p90 - med, 0, None)], fmt="none",
                     ecolor="black", elinewidth=0.8, capsize=1.5, zorder=3)
-        if name == annotate:   # its median's value above its whisker
-            for xi, m, top in zip(xs, med, np.fmax(med, p90)):
-                if math.isfinite(m):
-                    ax.annotate(f"{m:.2g}", (xi, top), textcoords="offset points", xytext=(0, 2),
-                                ha="center", va="bottom", fontsize=7, color=colors[name],
-                                fontweight="bold")
     ax.set_yscale("log")
     ax.set_xticks(x, LABELS)
     ax.set_ylabel("eq. (37) error [%]")
@@ -84,6 +78,13 @@ def grouped_bars(ax, series, colors, labels, annotate=None):
     finite = [v for s in series.values() for arr in s for v in arr if math.isfinite(v) and v > 0]
     if finite:
         ax.set_ylim(max(min(finite) / 2, 1e-3), max(finite) * 4)
+    if annotate in names:      # its medians' values, at the foot of its bars
+        k = names.index(annotate)
+        bottom = ax.get_ylim()[0]
+        for xi, m in zip(x - 0.4 + width * (k + 0.5), series[annotate][0]):
+            if math.isfinite(m) and m > bottom * 1.6:
+                ax.text(xi, bottom * 1.1, f"{m:.2g}", ha="center", va="bottom", fontsize=7,
+                        color="white", fontweight="bold", rotation=90, zorder=4)
     return x, width, names
 
 
