@@ -157,6 +157,8 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
     loadid_pipeline_t *p = NULL;
     int rc = loadid_pipeline_create(cfg, chain, &sink, trace_path ? publish_every : 0, &p, err,
                                     sizeof err);
+    /* The trace shows each estimate with its standard deviations. */
+    if (rc == 0 && trace_path) loadid_pipeline_std_always(p, 1);
     if (rc == 0) rc = loadid_offline_run(p, dir, &rep, err, sizeof err);
     if (rc != 0) {
         fprintf(stderr, "%s: %s\n", prog, err);

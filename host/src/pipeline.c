@@ -26,6 +26,7 @@ struct loadid_pipeline {
     loadid_config_t cfg;
     loadid_pipeline_sink_t sink;
     int publish_every;
+    int std_always;               /* phi_std in every published estimate */
     int n_params;                 /* 10 (zeroing) or 16 ([A E6]) */
     int num_methods;
     int has_riv;                  /* RIV configured: instruments needed */
@@ -207,6 +208,10 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
     return 0;
 }
 
+void loadid_pipeline_std_always(loadid_pipeline_t *p, int on) {
+    if (p) p->std_always = on != 0;
+}
+
 void loadid_pipeline_destroy(loadid_pipeline_t *p) {
     if (!p) return;
     for (int m = 0; m < LOADID_MAX_METHODS; ++m) loadid_est_destroy(p->est[m]);
@@ -291,6 +296,7 @@ static void estimate_at(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t 
     memset(&info, 0, sizeof info);
     const int rc = loadid_est_estimate(p->est[m], phi, &info);
     memset(e, 0, sizeof *e);
+    for (int i = 0; i < 10; ++i) e->phi_std[i] = NAN; /* not computed */
     e->utime = utime;
     e->samples = info.samples;
     e->method = p->cfg.methods[m];
@@ -315,7 +321,13 @@ static void estimate_at(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t 
     for (int i = 0; i < 3; ++i) e->com[i] = (double)ph.com[i];
     for (int i = 0; i < 6; ++i) e->inertia_com[i] = (double)ph.inertia_com[i];
     e->physically_consistent = ph.violations == 0;
-    if (final) model_of(p, m, phi, load, e);
+    if (final) {
+        model_of(p, m, phi, load, e);
+    } else if (p->std_always) {
+        loadid_real_t std[16];
+        const int ok = loadid_est_uncertainty(p->est[m], phi, std, NULL) == 0;
+        for (int i = 0; i < 10; ++i) e->phi_std[i] = ok ? (double)std[i] : INFINITY;
+    }
 }
 
 static void estimate_of(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t *e, int final) {

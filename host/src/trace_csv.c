@@ -18,6 +18,7 @@ int loadid_trace_csv_open(loadid_trace_csv_t *t, const char *path, char *err, si
     }
     fputs("t_s,method,valid,samples,mass,com_x,com_y,com_z,ixx,ixy,ixz,iyy,iyz,izz", t->out);
     for (int i = 0; i < 10; ++i) fprintf(t->out, ",phi%d", i);
+    for (int i = 0; i < 10; ++i) fprintf(t->out, ",phi_std%d", i);
     fputc('\n', t->out);
     return 0;
 }
@@ -28,14 +29,15 @@ void loadid_trace_csv_row(loadid_trace_csv_t *t, const loadid_pipeline_estimate_
     if (!t->out) return;
     /* An estimate with no sample since START carries an older time. */
     const double t_s = e->utime >= t->start_us ? (double)(e->utime - t->start_us) / 1e6 : 0.0;
-    double v[4 + 6 + 10];
+    double v[4 + 6 + 10 + 10];
     v[0] = e->mass;
     for (int i = 0; i < 3; ++i) v[1 + i] = e->com[i];
     for (int i = 0; i < 6; ++i) v[4 + i] = e->inertia_com[i];
     for (int i = 0; i < 10; ++i) v[10 + i] = e->phi[i];
+    for (int i = 0; i < 10; ++i) v[20 + i] = e->phi_std[i];
     fprintf(t->out, "%.9g,%s,%d,%lld", t_s, loadid_method_name((loadid_method_t)e->method),
             e->valid ? 1 : 0, (long long)e->samples);
-    for (int i = 0; i < 20; ++i) fprintf(t->out, ",%.9g", e->valid ? v[i] : NAN);
+    for (int i = 0; i < 30; ++i) fprintf(t->out, ",%.9g", e->valid ? v[i] : NAN);
     if (fputc('\n', t->out) == EOF && !t->errnum) t->errnum = errno ? errno : EIO;
 }
 

@@ -6,12 +6,14 @@
  * one per method with its final estimate (REFINED has only that one):
  *
  *   t_s,method,valid,samples,mass,com_x,com_y,com_z,ixx,ixy,ixz,iyy,iyz,izz,
- *   phi0,...,phi9
+ *   phi0,...,phi9,phi_std0,...,phi_std9
  *
  * t_s: the estimate's newest sample time minus START's [s]; mass, com and
  * the inertia about the COM (inertia_com, axes of S) and phi are the load's
- * (distal part removed), "nan" when !valid. Numbers %.9g. Offline only:
- * stdio, buffered.
+ * (distal part removed), "nan" when !valid; phi_std one standard deviation
+ * of each element of phi (loadidd asks the pipeline for it in every row,
+ * loadid_pipeline_std_always; "inf" where the data do not determine it).
+ * Numbers %.9g. Offline only: stdio, buffered.
  */
 #ifndef LOADID_TRACE_CSV_H
 #define LOADID_TRACE_CSV_H

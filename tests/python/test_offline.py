@@ -592,7 +592,8 @@ def test_messages_say_what_went_wrong(recording, trajectory, tmp_path):
 
 
 TRACE_HEADER = ("t_s,method,valid,samples,mass,com_x,com_y,com_z,ixx,ixy,ixz,iyy,iyz,izz,"
-                + ",".join(f"phi{i}" for i in range(10)))
+                + ",".join(f"phi{i}" for i in range(10)) + ","
+                + ",".join(f"phi_std{i}" for i in range(10)))
 
 
 def read_trace(path):
@@ -629,6 +630,11 @@ def test_trace_has_every_estimate_every_n_samples(recording, tmp_path):
         assert last["valid"] == 1 and on_line[-1]["valid"] == 1
         # Early rows: no estimate yet, said as valid 0 and nan.
         assert on_line[0]["valid"] == 0 and math.isnan(on_line[0]["mass"])
+        assert math.isnan(on_line[0]["phi_std0"])
+        # Every valid on-line row has its standard deviations, finite and
+        # positive here (o1 on the designed trajectory determines all ten).
+        std = np.array([[r[f"phi_std{i}"] for i in range(10)] for r in on_line if r["valid"]])
+        assert len(std) > 100 and np.all(np.isfinite(std)) and np.all(std > 0), m
     assert len(rows["REFINED"]) == 1 and rows["REFINED"][0]["samples"] == 1500
     assert rows["REFINED"][0]["t_s"] == rows["RTLS"][-1]["t_s"]
     # The last on-line RTLS row (after sample 1500) and every final row are
@@ -640,6 +646,10 @@ def test_trace_has_every_estimate_every_n_samples(recording, tmp_path):
         want = [float(f"{x:.9g}") for x in final[m]["phi"]]
         assert got == want, (m, got, final[m]["phi"])
         np.testing.assert_allclose(got, final[m]["phi"], rtol=5e-9, atol=0)
+        # phi_std likewise: the last on-line row's, computed from the same
+        # state as the final one's, is the JSON's too.
+        got_std = [row[f"phi_std{i}"] for i in range(10)]
+        assert got_std == [float(f"{x:.9g}") for x in final[m]["phi_std"]], (m, got_std)
         # mass, COM and the inertia about the COM are those of the row's phi.
         pm, pc, pic = physical(np.array(got))
         assert math.isclose(row["mass"], pm, rel_tol=1e-8)

@@ -227,14 +227,39 @@ SOLIDS = {
 }
 
 
+# The paper's other test loads (sec. V.A, Fig. 5: steel, 1 to 1.6 kg; "o2
+# consists of two identical blocks that may be stacked or used
+# separately"), whose dimensions the paper does not give: defined here as
+# solid steel blocks bolted with a face on the sensor's mounting face (the
+# x-y plane of S, z >= 0 on the load's side) and off the sensor's axis, as
+# o1's COM is (52 mm off the axis, 22.5 mm out). Each block: (edges a, b, c
+# along its own x, y, z [m], its centre in S [m], rpy [rad]); its mass is
+# STEEL_DENSITY times its volume, and the load's phi the sum of its blocks'.
+STEEL_DENSITY = 7850.0      # kg/m^3
+BLOCKS = {
+    "o2": ("two identical steel blocks 70x45x32 mm stacked, 36 mm off the axis",
+           [((0.070, 0.045, 0.032), (0.030, -0.020, 0.016), (0.0, 0.0, 0.0)),
+            ((0.070, 0.045, 0.032), (0.030, -0.020, 0.048), (0.0, 0.0, 0.0))]),
+    "o3": ("one steel block 110x50x30 mm, 43 mm off the axis, turned 30 deg about z",
+           [((0.110, 0.050, 0.030), (-0.035, 0.025, 0.015), (0.0, 0.0, math.radians(30.0)))]),
+}
+
+
+def block_mass(dims) -> float:
+    return STEEL_DENSITY * float(np.prod(dims))
+
+
 def load_phi(name: str) -> np.ndarray:
     if name == "o1":
         return O1_PHI.copy()
+    if name in BLOCKS:
+        return sum(phi_of_solid("box", block_mass(d), d, c, r) for d, c, r in BLOCKS[name][1])
     _, shape, mass, dims, com, rpy = SOLIDS[name]
     return phi_of_solid(shape, mass, dims, com, rpy)
 
 
-LOADS = ["o1", *SOLIDS]
+DEFAULT_LOADS = ["o1", *SOLIDS]
+LOADS = [*DEFAULT_LOADS, *BLOCKS]    # o2, o3: --loads, and --paper's
 
 
 def physical(phi):
@@ -676,7 +701,8 @@ def reference(rec: pathlib.Path, build: pathlib.Path, gravity=GRAVITY,
 # --------------------------------------------------------------------------
 # Running the shipped programs
 # --------------------------------------------------------------------------
-PROGRAMS = {"traj": "tools/loadid-traj", "sim": "tools/loadid-sim", "loadidd": "host/loadidd"}
+PROGRAMS = {"traj": "tools/loadid-traj", "sim": "tools/loadid-sim", "loadidd": "host/loadidd",
+            "kappa": "tools/loadid-kappa"}
 RETRY_WAIT_S = 5.0
 RETRY_FOR_S = 900.0
 
@@ -1092,6 +1118,17 @@ def self_test() -> int:
         check(f"{name} physically consistent", bool(ev.min() > 0 and 2 * ev.max() <= ev.sum()),
               f"m {got[0]:g} kg, principal {ev[0]:.2e} {ev[1]:.2e} {ev[2]:.2e}")
 
+    for name, (_, blocks) in BLOCKS.items():
+        want = sum(phi_of_points(point_cloud("box", d, 100) @ rpy_matrix(r).T + np.array(c),
+                                 block_mass(d)) for d, c, r in blocks)
+        got = load_phi(name)
+        rel = np.abs(got[4:] - want[4:]).max() / np.abs(want[4:]).max()
+        ev = np.linalg.eigvalsh(physical(got)[2])
+        check(f"{name} (steel blocks) against point masses", bool(rel < 1e-3) and 1.0 <= got[0] <= 1.6
+              and np.allclose(got[:4], want[:4], rtol=1e-9, atol=0),
+              f"m {got[0]:.4f} kg, worst inertia entry off by {rel:.1e} of the largest")
+        check(f"{name} physically consistent", bool(ev.min() > 0 and 2 * ev.max() <= ev.sum()))
+
     print("regressor (eq. 6) and zeroing term against Pinocchio (tests/python/pin_model.py)")
     from pin_model import body_regressor_loadid, phi_loadid, random_load
     rng = np.random.default_rng(7)
@@ -1251,13 +1288,16 @@ def main(argv=None) -> int:
                     "independent batch-TLS reference computed from each recording (numpy, "
                     "Pinocchio).",
         epilog="Loads: " + "; ".join([f"o1 (the paper's)"] + [f"{k}: {v[0]}, {v[2]:g} kg"
-                                                             for k, v in SOLIDS.items()])
+                                                             for k, v in SOLIDS.items()]
+                                     + [f"{k} (the paper's, not in the default set): {v[0]}, "
+                                        f"{load_phi(k)[0]:.2f} kg" for k, v in BLOCKS.items()])
         + ". Noise cells: low, paper, high (simulated F/T and accelerometer noise), wrong3x "
           "(paper noise, estimator told 1/3 of it), vibration (paper noise, vibration 1.0 m/s^2 "
           "and 15 rad/s^2), clean (no noise, no vibration; not in the default set).")
     ap.add_argument("--build", default=None, help="build tree with the programs (default build/release)")
     ap.add_argument("--robots", default=None, help=f"comma list of {', '.join(ROBOTS)} (default all)")
-    ap.add_argument("--loads", default=None, help=f"comma list of {', '.join(LOADS)} (default all)")
+    ap.add_argument("--loads", default=None,
+                    help=f"comma list of {', '.join(LOADS)} (default {','.join(DEFAULT_LOADS)})")
     ap.add_argument("--noise", default=None,
                     help=f"comma list of {', '.join(NOISE_CELLS)} (default {','.join(DEFAULT_NOISE)})")
     ap.add_argument("--seeds", type=int, default=None, help="seeds 1..N per cell (default 20)")
@@ -1280,16 +1320,36 @@ def main(argv=None) -> int:
     ap.add_argument("--keep", action="store_true",
                     help="keep the recordings (about 1 MB each) and loadidd's estimate traces "
                          "(results/*.trace.csv, about 0.2 MB each)")
+    ap.add_argument("--paper", action="store_true",
+                    help="the paper's experiments (sec. V): loads o1, o2, o3, trajectories tr1 and "
+                         "tr2, every signal source and method, 20 seeds (--seeds to change); "
+                         "writes runs.csv, Table I, the figures (PNG) and report.md into --out "
+                         "(see tools/study/paper_study.py)")
+    ap.add_argument("--replot", action="store_true",
+                    help="with --paper: make the figures and report.md again from --out's "
+                         "summary.json and traces, without running anything")
     ap.add_argument("--self-test", action="store_true",
                     help="check the geometry, regressor, smoother, TLS and JR3 decoding of this "
                          "program against independent computations, and exit")
     a = ap.parse_args(argv)
     if a.self_test:
         return self_test()
+    if a.paper:
+        given = [o for o, v in (("--robots", a.robots), ("--loads", a.loads), ("--noise", a.noise),
+                                ("--methods", a.methods), ("--signals", a.signals),
+                                ("--lag", a.lag), ("--jerk-psd", a.jerk_psd), ("--quick", a.quick))
+                 if v]
+        if given:
+            raise SystemExit(f"loadid-study: --paper runs the paper's own grid; {', '.join(given)} "
+                             "do not apply")
+        import paper_study
+        return paper_study.replot(a) if a.replot else paper_study.main(a)
+    if a.replot:
+        raise SystemExit("loadid-study: --replot needs --paper")
 
     began = time.monotonic()
     robots = parse_list(a.robots or ("rx60" if a.quick else ",".join(ROBOTS)), ROBOTS, "robot")
-    loads = parse_list(a.loads or ("o1,box" if a.quick else ",".join(LOADS)), LOADS, "load")
+    loads = parse_list(a.loads or ("o1,box" if a.quick else ",".join(DEFAULT_LOADS)), LOADS, "load")
     noises = parse_list(a.noise or ("paper" if a.quick else ",".join(DEFAULT_NOISE)), NOISE_CELLS,
                         "noise cell")
     seeds = a.seeds if a.seeds is not None else (3 if a.quick else 20)

@@ -68,7 +68,9 @@ typedef struct {
     int valid;                    /* 0: no estimate yet (error says why) */
     int error;                    /* the core's code when !valid */
     char why[160];                /* when !valid: what is missing, in words */
-    /* Filled in the final estimate (DONE) only, load_model_t's fields: */
+    /* Filled in the final estimate (DONE) only, load_model_t's fields
+     * (phi_std also in every valid estimate after
+     * loadid_pipeline_std_always): */
     int has_model;                /* 1 when the fields below are set */
     double phi_std[10];           /* one standard deviation of each element
                                      (+Inf: not determined by the data) */
@@ -137,6 +139,12 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
                            loadid_pipeline_t **out, char *err, size_t errlen);
 
 void loadid_pipeline_destroy(loadid_pipeline_t *p);
+
+/* Every valid estimate published while ESTIMATING carries phi_std too
+ * (loadid_est_uncertainty, a few microseconds each; allocates nothing),
+ * not only the final one: loadidd --offline --trace, for the error band
+ * of an estimate's evolution. Off by default. */
+void loadid_pipeline_std_always(loadid_pipeline_t *p, int on);
 
 /* Inputs, in time order. */
 void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_joints,
