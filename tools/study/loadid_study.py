@@ -1315,6 +1315,11 @@ def main(argv=None) -> int:
     ap.add_argument("--jerk-psd", type=float, default=None,
                     help="kalman.jerk_psd, the on-line joint filter's white-jerk spectral density "
                          "(default: the configuration's)")
+    ap.add_argument("--trajectory-per-seed", action="store_true",
+                    help="design a trajectory per seed (loadid-traj --seed N) instead of one per "
+                         "robot: the coverage of phi_std then covers the trajectory's own "
+                         "deterministic misfit (servo lag, backlash, quantisation) as a random "
+                         "quantity, as over the trajectories a user designs")
     ap.add_argument("--quick", action="store_true",
                     help="3 seeds, rx60, loads o1 and box, paper noise (options given override)")
     ap.add_argument("--keep", action="store_true",
@@ -1370,19 +1375,23 @@ def main(argv=None) -> int:
     stamp = program_stamp(build)
     log(f"build {build}; work folder {work}")
 
-    # One trajectory per robot, designed once and cached in the work folder.
+    # One trajectory per robot (or per robot and seed), designed once and
+    # cached in the work folder.
     trajectories = {}
     for robot in robots:
         cfg = work / "configs" / f"traj-{robot}.yaml"
         cfg.write_text(robot_yaml(robot))
-        tp = work / "traj" / f"{robot}-mc300-c1-e800.yaml"
-        if not tp.is_file():
-            r = run(build, "traj", ["--config", cfg, *TRAJ_BUDGET, "--out", tp], log=log)
-            kappa = [l for l in r.stderr.splitlines() if "kappa_design" in l]
-            log(f"trajectory {robot}: {(kappa or [r.stderr.strip()])[-1]} -> {tp}")
-        else:
-            log(f"trajectory {robot}: cached {tp}")
-        trajectories[robot] = tp
+        for seed in (range(1, seeds + 1) if a.trajectory_per_seed else [None]):
+            name = f"{robot}-mc300-c1-e800" + (f"-s{seed}" if seed else "")
+            tp = work / "traj" / f"{name}.yaml"
+            if not tp.is_file():
+                r = run(build, "traj", ["--config", cfg, *TRAJ_BUDGET, "--out", tp,
+                                        *(["--seed", seed] if seed else [])], log=log)
+                kappa = [l for l in r.stderr.splitlines() if "kappa_design" in l]
+                log(f"trajectory {name}: {(kappa or [r.stderr.strip()])[-1]} -> {tp}")
+            else:
+                log(f"trajectory {name}: cached {tp}")
+            trajectories[(robot, seed)] = tp
 
     # Tasks: one per recording; cells with the same simulation share it.
     tasks = []
@@ -1403,7 +1412,9 @@ def main(argv=None) -> int:
                 for seed in range(1, seeds + 1):
                     tasks.append(dict(build=str(build), workdir=str(work), robot=robot, load=load,
                                       seed=seed, rec_name=f"{sim_name}-s{seed}",
-                                      sim_config=str(sp), trajectory=str(trajectories[robot]),
+                                      sim_config=str(sp),
+                                      trajectory=str(trajectories[
+                                          (robot, seed if a.trajectory_per_seed else None)]),
                                       methods=methods, keep=a.keep,
                                       cells=[dict(noise=n, est_config=str(est_cfgs[n]))
                                              for n in cells]))
@@ -1436,7 +1447,8 @@ def main(argv=None) -> int:
 
     write_csv(out_dir / "runs.csv", rows)
     meta = dict(build=str(build), workdir=str(work), robots=robots, loads=loads, noise=noises,
-                seeds=seeds, methods=methods, jobs=a.jobs, seconds=elapsed,
+                seeds=seeds, trajectory_per_seed=a.trajectory_per_seed, methods=methods,
+                jobs=a.jobs, seconds=elapsed,
                 programs_changed_during_run=changed,
                 loads_phi={k: list(map(float, load_phi(k))) for k in loads},
                 noise_cells={k: NOISE_CELLS[k] for k in noises},
