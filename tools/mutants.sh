@@ -35,18 +35,18 @@ done
 # name <TAB> file <TAB> text to replace <TAB> replacement; several lines of
 # one name are one mutant. Each text must occur exactly once in its file.
 MUTANTS=$(cat <<'EOF'
-distal-not-subtracted	host/src/pipeline.c	loadid_phi_subtract(phi, p->distal, load);	memcpy(load, phi, sizeof load);
+distal-not-subtracted	host/src/pipeline/pipeline.c	loadid_phi_subtract(phi, p->distal, load);	memcpy(load, phi, sizeof load);
 tls-weights-identity	firmware/src/estimator.cpp	est->cfg.row_sigma[i] = row_sigma[i];	est->cfg.row_sigma[i] = 1;
 tls-weights-identity	firmware/src/estimator.cpp	est->cfg.col_weight[j] = col_weight[j];	est->cfg.col_weight[j] = 1;
 tls-weights-identity	firmware/src/estimator.cpp	cfg->col_weight[j] = std::sqrt(Real(LOADID_NROWS) / col_var[j]);	cfg->col_weight[j] = 0 * col_var[j] + 1;
-joint-time-skew-2ms	host/src/pipeline.c	if (loadid_signals_push_joints(p->sig, utime, num_joints,	if (loadid_signals_push_joints(p->sig, utime + 2000, num_joints,
+joint-time-skew-2ms	host/src/pipeline/pipeline.c	if (loadid_signals_push_joints(p->sig, utime, num_joints,	if (loadid_signals_push_joints(p->sig, utime + 2000, num_joints,
 zeroing-term-dropped	firmware/src/regressor.cpp	out += zeroing_term(Vec3(g_init[0], g_init[1], g_init[2]));	(void)zeroing_term(Vec3(g_init[0], g_init[1], g_init[2]));
 ixx-doubled	firmware/src/inertia.cpp	const Real v[6] = {Ic(0, 0),	const Real v[6] = {2 * Ic(0, 0),
 riv-instruments-measured	firmware/src/signals.cpp	if (instruments) motion_of(set, *instruments);	if (instruments) motion_of(meas, *instruments);
 saturation-bit-ignored	drivers/src/jr3.c	s->saturated = s->saturated || (s->status[i] & LOADID_JR3_STATUS_SATURATED);	s->saturated = s->saturated || (s->status[i] & 0);
 jr3-sequence-off-by-one	drivers/src/jr3.c	(uint8_t)(seq - dec->seq - 1u)	(uint8_t)(seq - dec->seq)
 gravity-in-base-frame	firmware/src/kinematics.cpp	Vec3 g = f.rot.transpose() * kin->gravity;	Vec3 g = kin->gravity;
-publish-every-ignored	host/src/pipeline.c	if (p->publish_every > 0 && ++p->since_publish >= p->publish_every) {	if (p->publish_every > 0) {
+publish-every-ignored	host/src/pipeline/pipeline.c	if (p->publish_every > 0 && ++p->since_publish >= p->publish_every) {	if (p->publish_every > 0) {
 EOF
 )
 names=$(printf '%s\n' "$MUTANTS" | cut -f1 | uniq)

@@ -1,6 +1,6 @@
 /*
- * Fuzz target config: the YAML configuration loader (host/src/config.c on
- * host/src/yaml_tree.c and libyaml), from a buffer as if it were the file
+ * Fuzz target config: the YAML configuration loader (host/src/config/config.c on
+ * host/src/config/yaml_tree.c and libyaml), from a buffer as if it were the file
  * /etc/loadid/loadid.yaml (loadid_config_load_string: nothing is read
  * from disk, relative paths resolve against /etc/loadid). Beyond the
  * sanitizers it checks what config.h and yaml_tree.h promise: a failure

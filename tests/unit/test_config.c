@@ -1,6 +1,6 @@
 /*
  * Unit tests of the configuration loader (loadid/config.h) and of the YAML
- * tree under it (host/src/yaml_tree.h).
+ * tree under it (host/include/loadid/yaml_tree.h).
  *
  * The expected defaults are written here literally, from docs/INTERFACE.md and
  * config.h, not taken from loadid_config_default: the shipped example

@@ -31,7 +31,7 @@ extern "C" {
 #endif
 
 /* At most this many joints in a joint_state_t: LOADID_MAX_JOINTS of the
- * core (firmware chain.h; host/src/live.c asserts they agree). */
+ * core (firmware chain.h; host/src/daemon/live.c asserts they agree). */
 #define LOADID_LCM_MAX_JOINTS 16
 /* A load_name's room including its NUL (LOADID_LOAD_NAME_MAX of the
  * pipeline): at most 127 characters. */

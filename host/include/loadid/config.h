@@ -32,7 +32,7 @@
  *     checked for existence here (the URDF reader reports that, after
  *     robot_urdf_origin: loadid_setup_load).
  *   - A file of several YAML documents, aliases (*name) and duplicate keys
- *     are errors (host/src/yaml_tree.h).
+ *     are errors (host/include/loadid/yaml_tree.h).
  */
 #ifndef LOADID_CONFIG_H
 #define LOADID_CONFIG_H

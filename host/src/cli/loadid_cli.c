@@ -129,7 +129,7 @@ static void print_status(const loadid_status_t *m) {
 }
 
 /* Why a command did not show its effect, given the state loadidd is in
- * (the pipeline's rules, host/src/pipeline.c run_command). */
+ * (the pipeline's rules, host/src/pipeline/pipeline.c run_command). */
 static const char *no_effect_hint(int action, int state) {
     if (state == FAILED) return ": 'loadid reset' clears FAILED (loadidd's log says why it failed)";
     if (action == ZERO && state == ESTIMATING) return ": ZERO is ignored while estimating";
