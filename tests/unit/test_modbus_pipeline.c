@@ -2,7 +2,7 @@
  * The Modbus F/T sensor's side of host/: the configuration keys sensor.*
  * and modbus.* (errors as "FILE:LINE: KEY: what", checked in full), and the
  * pipeline's entry for a decoded F/T sample without accelerometer
- * (loadid_pipeline_ft_sample): saturated and faulty samples are counted and
+ * (loadid_pipeline_sample): saturated and faulty samples are counted and
  * never reach an estimator. Expected counts are tallied by this test from
  * the samples it feeds.
  */
@@ -197,6 +197,16 @@ static void config_bauds_match_the_driver(void **state)
 
 /* ------------------------------------------------------------ pipeline */
 
+/* A Modbus F/T sample as the daemon hands it over: no accelerometer. */
+static void ft_sample(loadid_pipeline_t *p, int64_t t_us, const double f[3], const double tq[3],
+                      int sat, int bad)
+{
+    loadid_sensor_sample_t s = {.t_us = t_us, .saturated = sat != 0, .faulty = bad != 0};
+    memcpy(s.force, f, sizeof s.force);
+    memcpy(s.torque, tq, sizeof s.torque);
+    loadid_pipeline_sample(p, &s);
+}
+
 typedef struct {
     int64_t fed_saturated, fed_faulty, clean, clean_in_window;
 } tally_t;
@@ -216,7 +226,7 @@ static void run(loadid_pipeline_t *p, tally_t *t, int64_t t0)
         const double f[3] = {0.2 * big, -0.1 * big, 9.81 * big};
         const double tq[3] = {0.01 * big, 0.02, -0.01};
         /* in time order: the sample (now - 0.5 ms), a command, the joints */
-        loadid_pipeline_ft_sample(p, now - 500, f, tq, sat, bad);
+        ft_sample(p, now - 500, f, tq, sat, bad);
         if (i == 1) loadid_pipeline_command(p, now, LOADID_CMD_ZERO, "");
         if (i == 300) loadid_pipeline_command(p, now, LOADID_CMD_START, "modbus");
         if (i == 800) loadid_pipeline_command(p, now, LOADID_CMD_STOP, "");
@@ -276,8 +286,8 @@ static void pipeline_never_feeds_saturated_or_faulty(void **state)
     }
     /* non-finite values: counted as bad, not fed */
     const double nanf[3] = {0, 0, 0.0 / 0.0}, zero[3] = {0, 0, 0};
-    loadid_pipeline_ft_sample(p, 1700000001000000LL, nanf, zero, 0, 0);
-    loadid_pipeline_ft_sample(p, 1700000001000001LL, NULL, zero, 0, 0);
+    ft_sample(p, 1700000001000000LL, nanf, zero, 0, 0);
+    loadid_pipeline_sample(p, NULL); /* a read without a sample */
     loadid_pipeline_status(p, &st);
     assert_int_equal(st.frames_bad, 2);
     assert_int_equal(st.samples_ok, t.clean);

@@ -208,8 +208,9 @@ static void run_case(const case_t *tc) {
         if (finished) break;
         if (!quiet) {
             /* the F/T sample 0.5 ms before the joint state of the same ms */
-            const double f[3] = {0.2, -0.1, 9.81}, t[3] = {0.01, 0.02, -0.01};
-            loadid_pipeline_ft_sample(p, now - 500, f, t, 0, 0);
+            const loadid_sensor_sample_t x = {.t_us = now - 500, .force = {0.2, -0.1, 9.81},
+                                              .torque = {0.01, 0.02, -0.01}};
+            loadid_pipeline_sample(p, &x);
             loadid_pipeline_joint_state(p, now, 6, Q, Q);
         }
         if (ms % 10 == 0) loadid_pipeline_tick(p, now);

@@ -1,10 +1,13 @@
 /*
  * The estimation pipeline of loadidd, the same for the live service and
- * --offline: JR3 frames, joint states and commands in, in time order;
- * estimates, compensated wrenches and state changes out through callbacks.
+ * --offline: sensor samples (or the JR3's CAN frames), joint states and
+ * commands in, in time order; estimates, compensated wrenches and state
+ * changes out through callbacks.
  *
- *   frames  -> JR3 decoder (drivers/jr3.h): only complete, unsaturated,
- *              fault-free samples go on; everything else is counted
+ *   frames  -> JR3 decoder (drivers/jr3.h) -> a sensor sample; incomplete
+ *              samples and bad frames are counted
+ *   samples -> one type for every sensor (loadid_sensor_sample_t): only
+ *              unsaturated, fault-free ones go on; the others are counted
  *   joints  -> joint filters (firmware signals.h): wrong count, NaN, time
  *              going backwards refused and counted
  *   sample  -> by state:
@@ -84,12 +87,29 @@ typedef struct {
     double model_mass, model_com[3], model_inertia_com[6];
 } loadid_pipeline_estimate_t;
 
+/* One force-torque sample, whichever sensor it came from (the JR3's four
+ * CAN frames decoded by loadid_pipeline_can_frame, the Modbus sensor's
+ * registers by its poller): the one type the pipeline's queue, zeroing,
+ * estimators and wrench_t take. In S, SI. */
+typedef struct {
+    int64_t t_us;                 /* its time [us], the joint states' clock */
+    double force[3];              /* f [N] */
+    double torque[3];             /* tau [N m] */
+    double spec[3];               /* the accelerometer's a - g [m/s^2] */
+    double alpha[3];              /* its angular acceleration [rad/s^2] */
+    uint8_t has_accel;            /* spec and alpha measured (the JR3); else
+                                     they are 0 and the signal source (kf,
+                                     setpoint) takes them from the joints */
+    uint8_t saturated;            /* refused: counted, never fed */
+    uint8_t faulty;               /* refused: counted, never fed */
+} loadid_sensor_sample_t;
+
 /* Counters (status_t's and more). */
 typedef struct {
     int state;
     char reason[192];             /* why FAILED, else "" */
     int64_t samples_ok;           /* complete usable JR3 samples, and usable
-                                     loadid_pipeline_ft_sample ones */
+                                     loadid_pipeline_sample ones */
     int64_t samples_used;         /* fed to the estimators this run */
     int64_t frames_bad;           /* unknown id, wrong DLC, malformed, bad log line */
     int64_t samples_incomplete;
@@ -154,17 +174,15 @@ void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
 /* Returns 1 when the frame completed a JR3 sample (usable or refused as
  * saturated or faulty), else 0: the live loop times a sample from it. */
 int loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame);
-/* One already-decoded F/T sample from a sensor without an accelerometer
- * (the Modbus F/T of drivers/modbus_ft.h): t_us its time [us, the clock of
- * the joint states], force [N] and torque [N m] in S. It takes the JR3
- * sample's path (the pending queue, zeroing, estimation, wrench_t) with
- * a - g and alpha from the joints (estimation.signals kf or setpoint; with
- * sensor or mixed every such sample is refused, counted in frames_bad and
- * logged once). A saturated or faulty sample is counted
- * in samples_saturated / samples_faulty and never fed; a non-finite value
- * is counted in frames_bad. */
-void loadid_pipeline_ft_sample(loadid_pipeline_t *p, int64_t t_us, const double force[3],
-                               const double torque[3], int saturated, int faulty);
+/* One sample decoded outside the pipeline (the Modbus F/T of
+ * drivers/modbus_ft.h, which has no accelerometer). It takes the JR3
+ * sample's path (the pending queue, zeroing, estimation, wrench_t); one
+ * without an accelerometer is refused when estimation.signals needs one
+ * (sensor, mixed: counted in frames_bad and logged once). A saturated or
+ * faulty sample is counted in samples_saturated / samples_faulty and never
+ * fed; a non-finite value, or s NULL (a read that gave no sample), is
+ * counted in frames_bad. */
+void loadid_pipeline_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s);
 /* A can.log line or socket read that was not a frame. */
 void loadid_pipeline_bad_frame(loadid_pipeline_t *p);
 /* Time passes without input: ends zeroing and estimation windows that

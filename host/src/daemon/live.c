@@ -426,7 +426,10 @@ static void note_lateness(live_t *L, double late_us) {
  * t_us, CLOCK_REALTIME). */
 static void on_ft_sample(void *ctx, const loadid_modbus_ft_sample_t *s) {
     live_t *L = ctx;
-    loadid_pipeline_ft_sample(L->pipe, s->t_us, s->force, s->torque, s->saturated, s->faulty);
+    loadid_sensor_sample_t x = {.t_us = s->t_us, .saturated = s->saturated, .faulty = s->faulty};
+    memcpy(x.force, s->force, sizeof x.force);
+    memcpy(x.torque, s->torque, sizeof x.torque);
+    loadid_pipeline_sample(L->pipe, &x);
     note_lateness(L, (double)(wall_us() - s->t_us));
 }
 

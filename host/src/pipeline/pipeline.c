@@ -43,7 +43,7 @@ struct loadid_pipeline {
                                          noise share of its q, qd, qdd errors */
     loadid_real_t last_q[LOADID_MAX_JOINTS];
     int have_q;
-    int has_accel;                    /* the sensor has an accelerometer (JR3) */
+    int has_accel;                    /* the configured sensor has an accelerometer (JR3) */
     /* REFINED (refined.h) */
     int refined_m;                    /* its method index, -1 when not configured */
     loadid_refined_t *refined;
@@ -87,14 +87,14 @@ struct loadid_pipeline {
     loadid_real_t phi_total[16];  /* primary's estimate with the distal part */
 
     int64_t frames_bad_extra, samples_used, estimator_errors;
-    /* loadid_pipeline_ft_sample (a sensor without accelerometer) */
+    /* loadid_pipeline_sample (samples decoded outside, the Modbus sensor's) */
     int64_t ft_ok, ft_saturated, ft_faulty, ft_rejected;
     int ft_source_noted;          /* the refusal below was logged */
     /* Samples wait here until a joint state at or after their time has
      * arrived, so the joints are interpolated at the sample's time, not
      * extrapolated, and the result does not depend on which of the two
      * streams a process happened to read first (live equals offline). */
-    loadid_jr3_sample_t pending[PENDING_MAX];
+    loadid_sensor_sample_t pending[PENDING_MAX];
     int pending_head, pending_count;
     /* With the fixed-lag smoother, commands wait here too, until the joint
      * data cover their utime: the samples before a command must be served
@@ -822,7 +822,7 @@ static int data_matrix(const loadid_pipeline_t *p, const loadid_regressor_input_
 
 /* Completeness: the window's F/T samples, usable or refused, and the time
  * between them. */
-static void cover(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
+static void cover(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
     if (p->state != LOADID_STATE_ESTIMATING) return;
     if (s->t_us - p->cover_prev_us > p->ft_gap_us) p->missing_us += s->t_us - p->cover_prev_us;
     if (s->t_us > p->cover_prev_us) p->cover_prev_us = s->t_us;
@@ -831,15 +831,15 @@ static void cover(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
     p->win_faulty += s->faulty;
 }
 
-static void on_sample(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
+static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
     cover(p, s);
     if (s->saturated || s->faulty) return; /* queued for cover() only: never fed */
     loadid_real_t y[6], lin[3], ang[3];
     for (int i = 0; i < 3; ++i) {
-        y[i] = (loadid_real_t)s->value[LOADID_JR3_FORCE][i];
-        y[3 + i] = (loadid_real_t)s->value[LOADID_JR3_MOMENT][i];
-        lin[i] = (loadid_real_t)s->value[LOADID_JR3_LINEAR][i];
-        ang[i] = (loadid_real_t)s->value[LOADID_JR3_ANGULAR][i];
+        y[i] = (loadid_real_t)s->force[i];
+        y[3 + i] = (loadid_real_t)s->torque[i];
+        lin[i] = (loadid_real_t)s->spec[i];
+        ang[i] = (loadid_real_t)s->alpha[i];
     }
     double x[LOADID_NOISE_CHANNELS];
     for (int i = 0; i < 6; ++i) x[i] = (double)y[i];
@@ -893,7 +893,7 @@ static void on_sample(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
 
 /* Processes the oldest waiting sample: windows end by its time first. */
 static void pop_pending(loadid_pipeline_t *p) {
-    const loadid_jr3_sample_t *s = &p->pending[p->pending_head];
+    const loadid_sensor_sample_t *s = &p->pending[p->pending_head];
     advance(p, s->t_us);
     on_sample(p, s);
     p->pending_head = (p->pending_head + 1) % PENDING_MAX;
@@ -924,20 +924,34 @@ static void flush_pending(loadid_pipeline_t *p, int64_t before, int ready) {
     }
 }
 
-static void enqueue(loadid_pipeline_t *p, const loadid_jr3_sample_t *s);
+static void enqueue(loadid_pipeline_t *p, const loadid_sensor_sample_t *s);
+
+/* A decoded JR3 sample as the pipeline's sensor sample: its four groups
+ * in SI (jr3.h), the accelerometer's among them. */
+static void from_jr3(const loadid_jr3_sample_t *j, loadid_sensor_sample_t *s) {
+    s->t_us = j->t_us;
+    for (int i = 0; i < 3; ++i) {
+        s->force[i] = j->value[LOADID_JR3_FORCE][i];
+        s->torque[i] = j->value[LOADID_JR3_MOMENT][i];
+        s->spec[i] = j->value[LOADID_JR3_LINEAR][i];
+        s->alpha[i] = j->value[LOADID_JR3_ANGULAR][i];
+    }
+    s->has_accel = 1;
+    s->saturated = j->saturated;
+    s->faulty = j->faulty;
+}
 
 int loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *frame) {
     loadid_jr3_output_t out;
     const int rc = loadid_jr3_decoder_feed(p->jr3, frame, &out);
-    if (rc == LOADID_JR3_SAMPLE) {
-        enqueue(p, &out.sample);
-        return 1;
-    } else if (rc == LOADID_JR3_E_SATURATED || rc == LOADID_JR3_E_FAULT) {
-        /* Refused (counted by the decoder), but it takes its place in the
-         * queue: the window's completeness counts it, in time order. */
-        out.sample.saturated = out.sample.saturated || rc == LOADID_JR3_E_SATURATED;
-        out.sample.faulty = out.sample.faulty || rc == LOADID_JR3_E_FAULT;
-        enqueue(p, &out.sample);
+    if (rc == LOADID_JR3_SAMPLE || rc == LOADID_JR3_E_SATURATED || rc == LOADID_JR3_E_FAULT) {
+        /* A refused one (counted by the decoder) takes its place in the
+         * queue too: the window's completeness counts it, in time order. */
+        loadid_sensor_sample_t s;
+        from_jr3(&out.sample, &s);
+        s.saturated = s.saturated || rc == LOADID_JR3_E_SATURATED;
+        s.faulty = s.faulty || rc == LOADID_JR3_E_FAULT;
+        enqueue(p, &s);
         return 1;
     } else if (rc == LOADID_JR3_FULL_SCALE) {
         const loadid_jr3_full_scale_change_t *c = &out.full_scale;
@@ -948,8 +962,8 @@ int loadid_pipeline_can_frame(loadid_pipeline_t *p, const loadid_can_frame_t *fr
     return 0;
 }
 
-/* A JR3 sample's queue slot, so that both sensors share one path. */
-static void enqueue(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
+/* A sample's queue slot, whichever sensor it came from. */
+static void enqueue(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
     end_stalled_piece(p, s->t_us); /* by the samples' own clock: offline as live */
     if (p->pending_count == PENDING_MAX) pop_pending(p); /* joints this late: serve it now */
     p->pending[(p->pending_head + p->pending_count) % PENDING_MAX] = *s;
@@ -957,51 +971,49 @@ static void enqueue(loadid_pipeline_t *p, const loadid_jr3_sample_t *s) {
     flush_pending(p, INT64_MIN, 1);
 }
 
-void loadid_pipeline_ft_sample(loadid_pipeline_t *p, int64_t t_us, const double force[3],
-                               const double torque[3], int saturated, int faulty) {
+void loadid_pipeline_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
     if (!p) return;
-    if (faulty || saturated) {
-        /* Never fed (as the JR3's E_SATURATED / E_FAULT); queued for the
-         * window's completeness only. */
-        p->ft_saturated += saturated != 0;
-        p->ft_faulty += faulty != 0;
-        p->ft_rejected++;
-        loadid_jr3_sample_t r;
-        memset(&r, 0, sizeof r);
-        r.t_us = t_us;
-        r.saturated = saturated != 0;
-        r.faulty = faulty != 0;
-        enqueue(p, &r);
-        return;
-    }
-    if (!force || !torque) {
+    if (!s) {
         p->frames_bad_extra++;
         return;
     }
-    if (p->cfg.signals == LOADID_SIGNALS_SENSOR || p->cfg.signals == LOADID_SIGNALS_MIXED) {
-        /* The source wants the JR3's accelerometer, which this sample does
-         * not have (config.c refuses sensor.type modbus with these). */
+    if (s->faulty || s->saturated) {
+        /* Never fed (as the JR3's E_SATURATED / E_FAULT); queued for the
+         * window's completeness only. */
+        p->ft_saturated += s->saturated != 0;
+        p->ft_faulty += s->faulty != 0;
+        p->ft_rejected++;
+        loadid_sensor_sample_t r;
+        memset(&r, 0, sizeof r);
+        r.t_us = s->t_us;
+        r.saturated = s->saturated != 0;
+        r.faulty = s->faulty != 0;
+        enqueue(p, &r);
+        return;
+    }
+    if (!s->has_accel &&
+        (p->cfg.signals == LOADID_SIGNALS_SENSOR || p->cfg.signals == LOADID_SIGNALS_MIXED)) {
+        /* The source wants an accelerometer, which this sample does not
+         * have (config.c refuses sensor.type modbus with these). */
         p->frames_bad_extra++;
         if (!p->ft_source_noted)
             note(p, "F/T sample without accelerometer refused: estimation.signals needs one");
         p->ft_source_noted = 1;
         return;
     }
-    loadid_jr3_sample_t s;
-    memset(&s, 0, sizeof s);
+    loadid_sensor_sample_t c = *s;
     for (int i = 0; i < 3; ++i) {
-        if (!isfinite(force[i]) || !isfinite(torque[i])) {
+        if (!isfinite(s->force[i]) || !isfinite(s->torque[i]) ||
+            (s->has_accel && (!isfinite(s->spec[i]) || !isfinite(s->alpha[i])))) {
             p->frames_bad_extra++;
             return;
         }
-        s.value[LOADID_JR3_FORCE][i] = force[i];
-        s.value[LOADID_JR3_MOMENT][i] = torque[i];
-        /* No accelerometer: LINEAR and ANGULAR stay 0 and the signal
+        /* Without an accelerometer, spec and alpha are 0 and the signal
          * source (kf, setpoint) takes them from the joints. */
+        if (!s->has_accel) c.spec[i] = c.alpha[i] = 0;
     }
-    s.t_us = t_us;
     p->ft_ok++;
-    enqueue(p, &s);
+    enqueue(p, &c);
 }
 
 void loadid_pipeline_bad_frame(loadid_pipeline_t *p) { p->frames_bad_extra++; }
