@@ -426,3 +426,8 @@ const char *loadid_lcm_strerror(int code) {
         default: return "unknown LCM wire error";
     }
 }
+
+const char *loadid_lcm_state_name(int state) {
+    static const char *const names[] = {"IDLE", "ZEROING", "ESTIMATING", "DONE", "FAILED"};
+    return state >= 0 && state < (int)(sizeof names / sizeof names[0]) ? names[state] : "?";
+}

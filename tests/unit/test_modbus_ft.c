@@ -2,7 +2,7 @@
  * Tests of the Modbus RTU F/T sensor (proto/modbus_ft.md): the pure
  * decoder with register vectors (drivers/modbus_ft.h), then the libmodbus
  * client against a real libmodbus RTU server over a real pseudo-terminal
- * pair (no mocks), then the poller thread (host/src/daemon/modbus_input.h).
+ * pair (no mocks), then the poller thread (host/src/daemon/inputs/modbus_input.h).
  *
  * The pty: openpty() gives a master descriptor and a slave /dev/pts/N. The
  * sensor (loadid_modbus_ft_server, modbus_reply over a modbus_mapping_t)

@@ -31,7 +31,7 @@ extern "C" {
 #endif
 
 /* At most this many joints in a joint_state_t: LOADID_MAX_JOINTS of the
- * core (firmware chain.h; host/src/daemon/live.c asserts they agree). */
+ * core (firmware chain.h; host/src/daemon/lcm_inputs.c asserts they agree). */
 #define LOADID_LCM_MAX_JOINTS 16
 /* A load_name's room including its NUL (LOADID_LOAD_NAME_MAX of the
  * pipeline): at most 127 characters. */
@@ -150,6 +150,11 @@ int loadid_lcm_decode_load_model(const uint8_t *buf, size_t len, loadid_lcm_load
 
 /* A one-line description of a return code above. */
 const char *loadid_lcm_strerror(int code);
+
+/* The name of estimate_t's and status_t's state constants (IDLE 0 ..
+ * FAILED 4, docs/INTERFACE.md): "IDLE", ..., "FAILED"; "?" for another
+ * value. The one table of them, for every program's messages. */
+const char *loadid_lcm_state_name(int state);
 
 #ifdef __cplusplus
 }

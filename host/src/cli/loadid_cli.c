@@ -31,6 +31,7 @@
 #include "lcmtypes/loadid_estimate_t.h" /* the states status_t carries */
 #include "lcmtypes/loadid_status_t.h"
 #include "loadid/config.h"
+#include "loadid/lcm_wire.h" /* the states' names */
 
 static const char *prog = "loadid";
 
@@ -65,11 +66,6 @@ static int64_t now_us(void) {
     struct timespec ts;
     clock_gettime(CLOCK_REALTIME, &ts);
     return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
-}
-
-static const char *state_name(int s) {
-    static const char *names[] = {"IDLE", "ZEROING", "ESTIMATING", "DONE", "FAILED"};
-    return s >= 0 && s <= 4 ? names[s] : "?";
 }
 
 /* What the wait has seen. */
@@ -122,7 +118,7 @@ static void print_status(const loadid_status_t *m) {
     printf("state %s\nsamples_ok %lld\nframes_bad %lld\nsamples_incomplete %lld\n"
            "samples_saturated %lld\nsequence_gaps %lld\njoint_msgs_bad %lld\n"
            "loop_us p50 %.1f p99 %.1f max %.1f\n",
-           state_name(m->state), (long long)m->samples_ok, (long long)m->frames_bad,
+           loadid_lcm_state_name(m->state), (long long)m->samples_ok, (long long)m->frames_bad,
            (long long)m->samples_incomplete, (long long)m->samples_saturated,
            (long long)m->sequence_gaps, (long long)m->joint_msgs_bad, m->loop_us_p50,
            m->loop_us_p99, m->loop_us_max);
@@ -226,7 +222,7 @@ int main(int argc, char **argv) {
     } else if (!action) {
         print_status(&w.last);
     } else if (w.done && w.state == expected_state(action)) {
-        printf("state %s\n", state_name(w.state));
+        printf("state %s\n", loadid_lcm_state_name(w.state));
     } else if (w.done) { /* FAILED */
         fprintf(stderr, "%s: %s: loadidd is in state FAILED%s\n", prog, verb,
                 no_effect_hint(action, w.state));
@@ -234,7 +230,7 @@ int main(int argc, char **argv) {
     } else {
         fprintf(stderr, "%s: %s: loadidd is running (state %s) but did not act on it within "
                         "%.3g s%s\n",
-                prog, verb, state_name(w.state), timeout, no_effect_hint(action, w.state));
+                prog, verb, loadid_lcm_state_name(w.state), timeout, no_effect_hint(action, w.state));
         rc = 1;
     }
     loadid_status_t_unsubscribe(lcm, sub);

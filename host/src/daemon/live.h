@@ -1,5 +1,5 @@
-/* The live service of loadidd: one epoll loop over LCM, the CAN input, two
- * timers and the termination signals, driving the pipeline (live.c). */
+/* The live service of loadidd: one epoll loop over LCM, the sensor input,
+ * two timers and the termination signals, driving the pipeline (live.c). */
 #ifndef LOADID_LIVE_H
 #define LOADID_LIVE_H
 
@@ -16,8 +16,8 @@ typedef struct {
 } loadid_live_options_t;
 
 /* Runs until SIGTERM or SIGINT (a replayed can_file just falls silent at
- * its end). Returns
- * the exit status: 0, or 1 after printing why on stderr. */
+ * its end). Returns the exit status: 0, or 1 after
+ * printing why on stderr. */
 int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     const loadid_live_options_t *opt);
 

@@ -32,6 +32,7 @@
 
 #include "loadid/config.h"
 #include "loadid/core.h"
+#include "loadid/lcm_wire.h"
 #include "loadid/offline.h"
 #include "loadid/pipeline.h"
 #include "loadid/setup.h"
@@ -82,10 +83,10 @@ typedef struct {
 static void state_line(void *ctx, int64_t utime, int state, const char *reason) {
     const offline_ctx_t *c = ctx;
     if (c->trace && state == LOADID_STATE_ESTIMATING) loadid_trace_csv_start(c->trace, utime);
-    static const char *names[] = {"IDLE", "ZEROING", "ESTIMATING", "DONE", "FAILED"};
     const int64_t t0 = c->rep->t_first_us == INT64_MIN ? utime : c->rep->t_first_us;
     if (verbose)
-        fprintf(stderr, "%s: %.6f s: %s%s%s\n", prog, (double)(utime - t0) / 1e6, names[state],
+        fprintf(stderr, "%s: %.6f s: %s%s%s\n", prog, (double)(utime - t0) / 1e6,
+                loadid_lcm_state_name(state),
                 *reason ? ": " : "", reason);
 }
 
