@@ -4,7 +4,7 @@
  *   - LCM (lcm_link.c, the transport; lcm_inputs.c: joint_state_t and
  *     command_t into the pipeline);
  *   - the sensor input (inputs/input.h: one backend of SocketCAN, a
- *     candump log or the Modbus poller);
+ *     candump log, the Modbus poller or a replayed recording);
  *   - a 10 ms timerfd that ends zeroing and estimation windows on time and
  *     publishes status_t once a second (status.c);
  *   - a signalfd for SIGTERM and SIGINT (a clean stop);
@@ -160,7 +160,11 @@ static int open_input(live_t *L) {
     const int modbus = L->cfg->sensor_type == LOADID_SENSOR_MODBUS;
     loadid_input_options_t io = {0};
     const loadid_input_backend_t *b = &loadid_input_jr3_socketcan;
-    if (opt->can_file) {
+    if (opt->replay) {
+        b = &loadid_input_replay;
+        io.path = opt->replay;
+        io.with_commands = opt->replay_commands;
+    } else if (opt->can_file) {
         b = &loadid_input_jr3_candump;
         io.path = opt->can_file;
         io.epoch_us = opt->can_file_epoch;
@@ -168,7 +172,8 @@ static int open_input(live_t *L) {
         b = &loadid_input_modbus_rtu;
     }
     if (modbus && b != &loadid_input_modbus_rtu) {
-        loadidd_log("--can-file replays JR3 frames; sensor.type is modbus");
+        loadidd_log("%s replays JR3 frames; sensor.type is modbus",
+                    opt->replay ? "--replay" : "--can-file");
         return 1;
     }
     char err[4600];
@@ -197,7 +202,9 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         loadidd_log("%s", err);
         return 1;
     }
-    loadid_lcm_inputs_init(&L.lcm_in, cfg, L.pipe, channels[CH_JOINTS], channels[CH_COMMAND], 1);
+    /* During a replay the joint states are the recording's (inputs/replay.c). */
+    loadid_lcm_inputs_init(&L.lcm_in, cfg, L.pipe, channels[CH_JOINTS], channels[CH_COMMAND],
+                           !opt->replay);
     const char *const inputs[] = {channels[CH_JOINTS], channels[CH_COMMAND]};
     if (loadid_lcm_link_open(&L.lcm, cfg, inputs, 2, loadid_lcm_inputs_message, &L.lcm_in, err,
                              sizeof err) != 0) {
@@ -271,6 +278,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     break;
                 case TAG_TICK:
                     if (read(tick_fd, &v, sizeof v) < 0) break;
+                    loadid_input_catch_up(&L.input);
                     loadid_pipeline_tick(L.pipe, loadid_wall_us());
                     loadid_notify_watchdog((int64_t)loadid_mono_us());
                     if (++L.ticks % 100 == 0) {

@@ -20,6 +20,10 @@
  *       candump log replayed in real time; estimate_t (every N-th sample
  *       while estimating, and the final one), wrench_t once DONE, status_t
  *       at 1 Hz on LCM. SIGTERM or SIGINT stop it cleanly.
+ *   loadidd --config FILE --replay RECORDING_DIR [--replay-without-commands]
+ *       live, with a recording's JR3 frames, joint states and commands
+ *       replayed in real time in the daemon itself (inputs/replay.c): no
+ *       CAN, the normal LCM output, commands over LCM as well.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -50,6 +54,8 @@ static void usage(FILE *out) {
             "                [--verbose]\n"
             "       %s --config FILE [--can-file CAN.LOG [--can-file-epoch US]]\n"
             "                [--publish-every N] [--verbose]\n"
+            "       %s --config FILE --replay RECORDING_DIR [--replay-without-commands]\n"
+            "                [--publish-every N] [--verbose]\n"
             "Estimates the inertial parameters of the load on the robot's wrist sensor\n"
             "(Kubus, Kroeger, Wahl 2008). --offline runs the pipeline over a recording\n"
             "(can.log, lcm.log) and writes the final estimate of every configured method\n"
@@ -60,8 +66,12 @@ static void usage(FILE *out) {
             "phi). Without --offline it runs live:\n"
             "LCM in and out, JR3 frames from SocketCAN or a candump log (--can-file),\n"
             "or a Modbus F/T sensor (sensor.type modbus). --publish-every overrides\n"
-            "estimation.publish_every.\n",
-            prog, prog);
+            "estimation.publish_every. --replay runs live on a recording instead, without\n"
+            "CAN: its JR3 frames, joint states and commands (unless\n"
+            "--replay-without-commands) replayed in real time in the daemon, the times\n"
+            "shifted to now; LCM joint states are then not read; LCM output and LCM\n"
+            "commands as live.\n",
+            prog, prog, prog);
 }
 
 static int verbose;
@@ -241,7 +251,8 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
 
 int main(int argc, char **argv) {
     const char *config_path = NULL, *offline = NULL, *result = NULL, *can_file = NULL;
-    const char *trace = NULL;
+    const char *trace = NULL, *replay = NULL;
+    int replay_commands = 1;
     int publish_every = 0; /* 0: estimation.publish_every (live), 10 (--trace) */
     int allow_incomplete = 0;
     long long epoch = 0;
@@ -251,6 +262,8 @@ int main(int argc, char **argv) {
         {"can-file", required_argument, NULL, 'f'}, {"publish-every", required_argument, NULL, 'p'},
         {"can-file-epoch", required_argument, NULL, 'e'},
         {"allow-incomplete", no_argument, NULL, 'a'}, {"trace", required_argument, NULL, 't'},
+        {"replay", required_argument, NULL, 'R'},
+        {"replay-without-commands", no_argument, NULL, 'W'},
         {"help", no_argument, NULL, 'h'},         {NULL, 0, NULL, 0}};
     int c;
     while ((c = getopt_long(argc, argv, "c:o:r:vh", opts, NULL)) != -1) {
@@ -263,6 +276,8 @@ int main(int argc, char **argv) {
             case 'e': epoch = strtoll(optarg, NULL, 10); break;
             case 'a': allow_incomplete = 1; break;
             case 't': trace = optarg; break;
+            case 'R': replay = optarg; break;
+            case 'W': replay_commands = 0; break;
             case 'p': {
                 char *end;
                 long v = strtol(optarg, &end, 10);
@@ -300,11 +315,21 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s: --trace needs --offline\n", prog);
         return 2;
     }
+    if (replay && (offline || can_file)) {
+        fprintf(stderr, "%s: --replay runs live on a recording: not with %s\n", prog,
+                offline ? "--offline" : "--can-file");
+        return 2;
+    }
+    if (!replay_commands && !replay) {
+        fprintf(stderr, "%s: --replay-without-commands needs --replay\n", prog);
+        return 2;
+    }
     static loadid_config_t cfg;
     loadid_chain_t chain;
     if (loadid_setup_load(prog, config_path, &cfg, &chain) != 0) return 1;
     if (!offline) {
         loadid_live_options_t live = {.can_file = can_file, .can_file_epoch = epoch,
+                                      .replay = replay, .replay_commands = replay_commands,
                                       .publish_every = publish_every ? publish_every
                                                                      : cfg.publish_every,
                                       .verbose = verbose};

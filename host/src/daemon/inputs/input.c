@@ -27,6 +27,10 @@ void loadid_input_read(loadid_input_t *in) {
     if (in->backend) in->backend->read(in);
 }
 
+void loadid_input_catch_up(loadid_input_t *in) {
+    if (in->backend && in->backend->catch_up) in->backend->catch_up(in);
+}
+
 void loadid_input_second(loadid_input_t *in) {
     if (in->backend && in->backend->second) in->backend->second(in);
 }

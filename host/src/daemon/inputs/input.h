@@ -7,10 +7,12 @@
  *   jr3_candump.c     JR3 frames from a candump log in real time (--can-file)
  *   modbus_rtu.c      the Modbus RTU F/T sensor (sensor.type modbus), polled
  *                     by its own thread (modbus_input.h)
+ *   replay.c          a whole recording in real time (--replay): its JR3
+ *                     frames, joint states and commands
  *
  * The loop waits on the input's file descriptor and calls read when it is
- * readable; the input hands what it has to the pipeline (frames or
- * samples). Each backend owns its
+ * readable; the input hands what it has to the pipeline (frames, samples,
+ * and for a replay joint states and commands too). Each backend owns its
  * counters and gives them in one form (loadid_input_counters_t), which
  * status.c maps into status_t with the pipeline's. Samples handled more
  * than 1 ms after their arrival are counted here, for every backend that
@@ -48,9 +50,10 @@ typedef struct {
 
 /* What a backend is told besides the configuration. */
 typedef struct {
-    const char *path;            /* jr3_candump: the log */
+    const char *path;            /* jr3_candump: the log; replay: the folder */
     int64_t epoch_us;            /* jr3_candump: the wall time of the first frame;
-                                    0: now */
+                                    replay: of the first event; 0: now */
+    int with_commands;           /* replay: its command_t events act too */
 } loadid_input_options_t;
 
 typedef struct loadid_input loadid_input_t;
@@ -67,6 +70,10 @@ typedef struct {
     int (*fd)(const loadid_input_t *in);
     /* The descriptor is readable: hands what is due to the pipeline. */
     void (*read)(loadid_input_t *in);
+    /* May be NULL. Before the clock's tick: hands what is due by now, so
+     * the clock never judges the pipeline ahead of an input it paces
+     * itself (a replay whose timer waits behind the tick). */
+    void (*catch_up)(loadid_input_t *in);
     /* May be NULL. Once a second: reopen what was lost, log what grew. */
     void (*second)(loadid_input_t *in);
     /* May be NULL. At the stop, before the summary: what happened since
@@ -92,10 +99,11 @@ struct loadid_input {
     double late_max_us, late_warned_us;
 };
 
-/* The backends. */
+/* The four backends. */
 extern const loadid_input_backend_t loadid_input_jr3_socketcan;
 extern const loadid_input_backend_t loadid_input_jr3_candump;
 extern const loadid_input_backend_t loadid_input_modbus_rtu;
+extern const loadid_input_backend_t loadid_input_replay;
 
 /* Creates and opens in (the context is static: one input per daemon).
  * Returns 0, or a negative code with a one-line reason in err (and in is
@@ -105,6 +113,7 @@ int loadid_input_open(loadid_input_t *in, const loadid_input_backend_t *backend,
                       const loadid_input_options_t *opt, char *err, size_t errlen);
 int loadid_input_fd(const loadid_input_t *in);
 void loadid_input_read(loadid_input_t *in);
+void loadid_input_catch_up(loadid_input_t *in);
 void loadid_input_second(loadid_input_t *in);
 void loadid_input_finish(loadid_input_t *in);
 void loadid_input_counters(const loadid_input_t *in, loadid_input_counters_t *c);

@@ -49,7 +49,8 @@ static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *er
         const int absent = c->fd == -EAFNOSUPPORT || c->fd == -EPROTONOSUPPORT || c->fd == -ENODEV;
         snprintf(err, errlen, "%s%s", why,
                  absent ? "; or, without a CAN bus, JR3 frames from a candump log "
-                          "(--can-file CAN.LOG) or a whole recording (--offline DIR)"
+                          "(--can-file CAN.LOG) or a whole recording (--offline DIR, "
+                          "--replay DIR)"
                         : "");
         return c->fd;
     }

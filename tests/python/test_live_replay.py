@@ -1,0 +1,133 @@
+"""loadidd --replay DIR (docs/INTERFACE.md, "Command line"): the daemon
+replays a recording's JR3 frames, joint states and commands itself, in real
+time, with no CAN and nothing else publishing, and its output goes out on
+LCM as live (UDP multicast in a private network namespace). Its final
+estimates are loadidd --offline's on the same recording to 1e-9, as the
+other live sessions' are, and they arrive over LCM: estimate_t while
+estimating and at DONE, load_model_t, status_t with the state changes,
+wrench_t once DONE; and the loop allocates nothing meanwhile (release
+build). Plus the refusals of the command line, which need no session."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+from alloc_report import counts, loop_sites
+from recordings import program
+from test_live_lcm import run_in_netns
+from test_live_no_alloc import counted
+
+NAMES = {1: "RLS", 2: "RIV", 3: "RTLS", 6: "REFINED"}
+
+
+@pytest.fixture(scope="module")
+def config(tmp_path_factory):
+    cfg = tmp_path_factory.mktemp("replay") / "c.yaml"
+    cfg.write_text("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n"
+                   "estimation:\n  methods: [RTLS, RIV, RLS, REFINED]\n")
+    return cfg
+
+
+@pytest.fixture(scope="module")
+def session(config, recording, tmp_path_factory):
+    """The session; in the release build (not under the sanitizers, whose
+    allocator it would meet) with the allocation counter preloaded into the
+    daemon, as test_live_no_alloc.py runs the other sessions."""
+    def run():
+        return run_in_netns("replay_session.py", program("LOADIDD_EXE"), config, recording,
+                            os.environ["LOADID_LCM_PYTHON_DIR"])
+    if not os.environ.get("LOADID_ALLOC_COUNT_LIB"):
+        return run()
+    return counted(tmp_path_factory.mktemp("replay_alloc"), run)
+
+
+@pytest.fixture(scope="module")
+def offline(config, recording):
+    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(config), "--offline",
+                        str(recording), "--verbose"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    ok = re.search(r"^loadidd: samples ok (\d+),", r.stderr, re.M)
+    return {"result": {o["method"]: o for o in json.loads(r.stdout)},
+            "samples_ok": int(ok.group(1))}
+
+
+def test_replay_runs_and_stops_cleanly(session):
+    assert session["returncode"] == 0, session["stderr"]
+    assert "replayed (" in session["stderr"], session["stderr"]  # to its end
+
+
+def test_no_allocation_in_the_loop_while_replaying(session):
+    """The replay's file reads and decoding allocate nothing after start-up
+    either (release build: the counter's report; under the sanitizers there
+    is none)."""
+    if "report" not in session:
+        assert not os.environ.get("LOADID_ALLOC_COUNT_LIB")
+        return
+    c = counts(session["report"])
+    assert c["epoll_waits"] > 3000, session["report"]  # the whole replay in the window
+    assert c["loop_allocations"] == 0, "allocations in the loop:\n" + "\n".join(
+        loop_sites(session["report"], program("LOADIDD_EXE")))
+
+
+def test_final_estimates_over_lcm_equal_offline(session, offline):
+    finals = [e for e in session["estimate"] if e["state"] == 3]
+    assert sorted(e["method"] for e in finals) == [1, 2, 3, 6], session["stderr"]
+    for e in finals:
+        o = offline["result"][NAMES[e["method"]]]
+        assert e["samples"] == o["samples"] == 1500 and e["load_name"] == o["load_name"]
+        np.testing.assert_allclose(e["phi"], o["phi"], rtol=1e-9, atol=1e-12)
+    # Estimates while estimating (estimation.publish_every 1: every sample),
+    # REFINED once; their times the recording's shifted to the daemon's now.
+    running = [e for e in session["estimate"] if e["state"] == 2]
+    assert len(running) >= 3 * 1400 and 6 not in {e["method"] for e in running}
+    span_us = session["span_s"] * 1e6
+    assert all(session["wall_start_us"] <= e["utime"] <= session["wall_start_us"] + span_us + 5e6
+               for e in finals), finals
+
+
+def test_model_status_and_wrench_over_lcm(session, offline):
+    m = session["model"]
+    assert len(m) == 1, m
+    o = offline["result"][NAMES[m[0]["method"]]]
+    np.testing.assert_allclose(m[0]["phi"], o["model_phi"], rtol=1e-9, atol=1e-12)
+    st = session["status"]
+    states = [s["state"] for s in st]
+    # The recording's ZERO and START acted: every state change announced.
+    for a, b in ((1, 0), (0, 2), (2, 3)):
+        assert any(x == a and y == b for x, y in zip(states, states[1:])), states
+    last = st[-1]
+    assert last["state"] == 3 and last["samples_ok"] == offline["samples_ok"], last
+    assert last["frames_bad"] == last["sequence_gaps"] == last["joint_msgs_bad"] == 0, last
+    assert session["wrench"] > 500  # every sample after DONE (0.8 s of the recording)
+
+
+def test_replay_options_refused_where_they_do_not_apply(recording, tmp_path):
+    """Usage errors exit 2; a folder that is no recording, and a Modbus
+    sensor (a recording holds JR3 frames), exit 1 with the reason (LCM on
+    memq://: nothing leaves the process)."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("lcm:\n  url: memq://\n")
+    modbus = tmp_path / "m.yaml"
+    modbus.write_text("lcm:\n  url: memq://\nsensor:\n  type: modbus\n")
+
+    def run(c, *args):
+        return subprocess.run([program("LOADIDD_EXE"), "--config", str(c), *map(str, args)],
+                              capture_output=True, text=True, timeout=30)
+
+    r = run(cfg, "--replay", recording, "--offline", recording)
+    assert r.returncode == 2 and "--replay" in r.stderr and "--offline" in r.stderr, r.stderr
+    r = run(cfg, "--replay", recording, "--can-file", recording / "can.log")
+    assert r.returncode == 2 and "--can-file" in r.stderr, r.stderr
+    r = run(cfg, "--replay-without-commands")
+    assert r.returncode == 2 and "--replay-without-commands needs --replay" in r.stderr, r.stderr
+    r = run(cfg, "--replay", tmp_path / "none")
+    assert r.returncode == 1 and "none/can.log: cannot read" in r.stderr, r.stderr
+    r = run(modbus, "--replay", recording)
+    assert r.returncode == 1 and "--replay replays JR3 frames; sensor.type is modbus" in r.stderr, \
+        r.stderr
