@@ -13,7 +13,9 @@ from __future__ import annotations
 import json
 import os
 import re
+import signal
 import subprocess
+import time
 
 import numpy as np
 import pytest
@@ -131,3 +133,25 @@ def test_replay_options_refused_where_they_do_not_apply(recording, tmp_path):
     r = run(modbus, "--replay", recording)
     assert r.returncode == 1 and "--replay replays JR3 frames; sensor.type is modbus" in r.stderr, \
         r.stderr
+
+
+def test_replay_without_commands_leaves_them_to_lcm(recording, tmp_path):
+    """--replay-without-commands: the recording's ZERO (at 0.05 s) and START
+    (at 1 s) are not replayed, so 1.3 s of it change no state; the joint
+    states and frames still are (LCM on memq://: no network)."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("lcm:\n  url: memq://\n")
+    daemon = subprocess.Popen([program("LOADIDD_EXE"), "--config", str(cfg), "--replay",
+                               str(recording), "--replay-without-commands", "--verbose"],
+                              stderr=subprocess.PIPE, text=True)
+    time.sleep(1.3)
+    daemon.send_signal(signal.SIGTERM)
+    err = daemon.communicate(timeout=30)[1]
+    assert daemon.returncode == 0, err
+    assert "its commands not replayed" in err, err
+    assert not re.search(r"^loadidd: \d+: (ZEROING|ESTIMATING)", err, re.M), err
+    m = re.search(r"^loadidd: replay events (\d+), joint states (\d+) \(undecodable 0\), "
+                  r"commands 0 ", err, re.M)
+    assert m and int(m.group(2)) >= 1000, err  # a second of 1 kHz joint states went in
+    ok = re.search(r"^loadidd: samples ok (\d+), used 0,", err, re.M)
+    assert ok and int(ok.group(1)) >= 1000, err
