@@ -124,7 +124,7 @@ static void expect_error(const char *text, const char *rest) {
     snprintf(expected, sizeof expected, "%s:%s", path, rest);
     loadid_config_t cfg;
     warnings_t w = {0};
-    assert_int_equal(loadid_config_load(path, &cfg, err, sizeof err, collect, &w), -1);
+    assert_int_equal(loadid_config_load(path, &cfg, err, sizeof err, collect, &w), -EINVAL);
     assert_prefix(err, expected);
     assert_null(strchr(err, '\n'));
     assert_int_equal(w.count, 0);
@@ -862,7 +862,7 @@ static void other_programs_sections_are_warnings(void **state) {
     /* An error elsewhere: no warning at all (warnings come with success). */
     const char *bad = write_file("shared_bad.yaml", "dashboard:\n  port: 1\nrobot:\n  urdff: x\n");
     memset(&w, 0, sizeof w);
-    assert_int_equal(loadid_config_load(bad, &c, err, sizeof err, collect, &w), -1);
+    assert_int_equal(loadid_config_load(bad, &c, err, sizeof err, collect, &w), -EINVAL);
     assert_int_equal(w.count, 0);
     snprintf(expected, sizeof expected, "%s:4: robot.urdff: unknown key (did you mean 'urdf'?)",
              bad);
@@ -890,28 +890,28 @@ static void unreadable_files(void **state) {
     loadid_config_t c;
     memset(&c, 0x5a, sizeof c);
     loadid_config_t before = c;
-    assert_int_equal(loadid_config_load(missing, &c, err, sizeof err, NULL, NULL), -1);
+    assert_int_equal(loadid_config_load(missing, &c, err, sizeof err, NULL, NULL), -ENOENT);
     snprintf(expected, sizeof expected, "%s: cannot read: No such file or directory", missing);
     assert_string_equal(err, expected);
     assert_memory_equal(&c, &before, sizeof c);
 
     const char *dir = make_dir("a_dir.yaml");
-    assert_int_equal(loadid_config_load(dir, &c, err, sizeof err, NULL, NULL), -1);
+    assert_int_equal(loadid_config_load(dir, &c, err, sizeof err, NULL, NULL), -EISDIR);
     snprintf(expected, sizeof expected, "%s: cannot read: Is a directory", dir);
     assert_string_equal(err, expected);
 
     /* A failing load leaves cfg untouched. */
     const char *bad = write_file("bad.yaml", "robot:\n  base_link: x\ncan:\n  base_id: 0x800\n");
-    assert_int_equal(loadid_config_load(bad, &c, err, sizeof err, NULL, NULL), -1);
+    assert_int_equal(loadid_config_load(bad, &c, err, sizeof err, NULL, NULL), -EINVAL);
     assert_memory_equal(&c, &before, sizeof c);
 
     /* Bad arguments, and a NULL error buffer. */
-    assert_int_equal(loadid_config_load(NULL, &c, err, sizeof err, NULL, NULL), -1);
-    assert_int_equal(loadid_config_load(EXAMPLE, NULL, err, sizeof err, NULL, NULL), -1);
-    assert_int_equal(loadid_config_load(bad, &c, NULL, 0, NULL, NULL), -1);
+    assert_int_equal(loadid_config_load(NULL, &c, err, sizeof err, NULL, NULL), -EINVAL);
+    assert_int_equal(loadid_config_load(EXAMPLE, NULL, err, sizeof err, NULL, NULL), -EINVAL);
+    assert_int_equal(loadid_config_load(bad, &c, NULL, 0, NULL, NULL), -EINVAL);
     /* A short error buffer is truncated, NUL-terminated. */
     char small[12];
-    assert_int_equal(loadid_config_load(bad, &c, small, sizeof small, NULL, NULL), -1);
+    assert_int_equal(loadid_config_load(bad, &c, small, sizeof small, NULL, NULL), -EINVAL);
     assert_int_equal(strlen(small), sizeof small - 1);
 }
 
@@ -946,13 +946,13 @@ static void load_from_a_buffer(void **state) {
     loadid_config_t before = from_text;
     const char bad[] = "can:\n  base_id: 0x800\n";
     assert_int_equal(loadid_config_load_string("/nowhere/c.yaml", bad, strlen(bad), &from_text,
-                                               err, sizeof err, NULL, NULL), -1);
+                                               err, sizeof err, NULL, NULL), -EINVAL);
     assert_prefix(err, "/nowhere/c.yaml:2: can.base_id:");
     assert_memory_equal(&from_text, &before, sizeof before);
     assert_int_equal(loadid_config_load_string(NULL, bad, 1, &from_text, err, sizeof err, NULL,
-                                               NULL), -1);
+                                               NULL), -EINVAL);
     assert_int_equal(loadid_config_load_string("c.yaml", NULL, 1, &from_text, err, sizeof err,
-                                               NULL, NULL), -1);
+                                               NULL, NULL), -EINVAL);
 }
 
 /* --- The YAML tree itself ------------------------------------------------- */

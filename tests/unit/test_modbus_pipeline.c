@@ -73,7 +73,7 @@ static void expect_error(const char *text, const char *rest, int whole)
 {
     loadid_config_t cfg;
     char err[512], want[512];
-    assert_int_equal(load_text(text, &cfg, err, sizeof err), -1);
+    assert_int_equal(load_text(text, &cfg, err, sizeof err), -EINVAL);
     snprintf(want, sizeof want, "%s:%s", g_file, rest);
     if (whole ? strcmp(err, want) != 0 : strncmp(err, want, strlen(want)) != 0) {
         print_error("expected%s\n  %s\ngot\n  %s\n", whole ? "" : " a prefix", want, err);

@@ -32,6 +32,12 @@
 
 static const char *prog = "loadid-demo";
 
+/* A warning of the configuration (another program's section). */
+static void warn_line(void *ctx, const char *msg) {
+    (void)ctx;
+    fprintf(stderr, "%s: warning: %s\n", prog, msg);
+}
+
 static const char *const kParamNames[10] = {"m", "m*cx", "m*cy", "m*cz", "Ixx",
                                             "Ixy", "Ixz", "Iyy", "Iyz", "Izz"};
 
@@ -202,7 +208,12 @@ int main(int argc, char **argv) {
     }
     static loadid_config_t cfg;
     loadid_chain_t chain;
-    if (loadid_setup_load(prog, NULL, &cfg, &chain) != 0) return 1;
+    char setup_err[1200];
+    if (loadid_setup_load(NULL, &cfg, &chain, warn_line, NULL, setup_err,
+                          sizeof setup_err) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, setup_err);
+        return 1;
+    }
     loadid_signal_source_t src;
     if (loadid_signal_source_parse(signals, &src) != 0 ||
         (strcmp(offset_model, "zeroing") && strcmp(offset_model, "estimate"))) {
@@ -240,7 +251,7 @@ int main(int argc, char **argv) {
     loadid_sim_options_t opt = {.cfg = &cfg, .chain = &chain, .traj = &tr, .kappa_design = kappa,
                                 .traj_path = "(designed by loadid-demo)", .out_dir = dir,
                                 .load_name = "o1", .seed = seed,
-                                .start_utime = 1700000000000000LL};
+                                .start_utime = 1700000000000000LL, .warn = warn_line};
     loadid_damage_init(&opt.damage, seed);
     loadid_sim_summary_t sum;
     int rc = loadid_sim_run(&opt, &sum, err, sizeof err);

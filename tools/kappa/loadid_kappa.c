@@ -32,6 +32,12 @@
 #include "loadid/setup.h"
 
 static const char *prog = "loadid-kappa";
+
+/* A warning of the configuration (another program's section). */
+static void warn_line(void *ctx, const char *msg) {
+    (void)ctx;
+    fprintf(stderr, "%s: warning: %s\n", prog, msg);
+}
 static int weighted; /* --weighted: the estimator's D and T, else D = I, T = I */
 
 enum { KAPPA_SET, KAPPA_SENS, KAPPA_KF, KAPPAS };
@@ -222,7 +228,12 @@ int main(int argc, char **argv) {
     }
     static loadid_config_t cfg;
     loadid_chain_t chain;
-    if (loadid_setup_load(prog, config_path, &cfg, &chain) != 0) return 1;
+    char setup_err[1200];
+    if (loadid_setup_load(config_path, &cfg, &chain, warn_line, NULL, setup_err,
+                          sizeof setup_err) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, setup_err);
+        return 1;
+    }
     printf("%-28s %-10s %8s %10s %10s %10s\n", "recording", "load", "samples",
            weighted ? "kappa_set_w" : "kappa_set", weighted ? "kappa_sens_w" : "kappa_sens",
            weighted ? "kappa_kf_w" : "kappa_kf");

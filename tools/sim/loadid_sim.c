@@ -45,6 +45,12 @@
 
 static const char *prog = "loadid-sim";
 
+/* A warning of the configuration (another program's section). */
+static void warn_line(void *ctx, const char *msg) {
+    (void)ctx;
+    fprintf(stderr, "%s: warning: %s\n", prog, msg);
+}
+
 /* What main keeps: the inputs it reads before the simulation runs. */
 static struct {
     loadid_config_t cfg;
@@ -150,7 +156,12 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s: --out %s\n", prog, err);
         return 1;
     }
-    if (loadid_setup_load(prog, config_path, &s.cfg, &s.chain) != 0) return 1;
+    char setup_err[1200];
+    if (loadid_setup_load(config_path, &s.cfg, &s.chain, warn_line, NULL, setup_err,
+                          sizeof setup_err) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, setup_err);
+        return 1;
+    }
     if (load_phi && parse_phi(load_phi, s.cfg.sim_load_phi) != 0) {
         fprintf(stderr, "%s: --load-phi: expected 10 comma-separated numbers: %s\n", prog, load_phi);
         return 2;
@@ -184,6 +195,7 @@ int main(int argc, char **argv) {
         .seed = the_seed,
         .start_utime = t0,
         .damage = s.damage,
+        .warn = warn_line,
     };
     loadid_sim_summary_t sum;
     if (loadid_sim_run(&opt, &sum, err, sizeof err) != 0) {

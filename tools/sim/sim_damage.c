@@ -34,7 +34,7 @@ int loadid_damage_parse(loadid_damage_t *d, const char *spec, char *err, size_t 
     const char *eq = strchr(spec, '=');
     if (!eq) {
         snprintf(err, errlen, "--damage %s: expected KIND=VALUE", spec);
-        return -1;
+        return -EINVAL;
     }
     const size_t klen = (size_t)(eq - spec);
     const char *value = eq + 1;
@@ -44,13 +44,13 @@ int loadid_damage_parse(loadid_damage_t *d, const char *spec, char *err, size_t 
         char *colon = strchr(buf, ':');
         if (!colon) {
             snprintf(err, errlen, "--damage stall-joints=%s: expected T0:T1 in seconds", value);
-            return -1;
+            return -EINVAL;
         }
         *colon = 0;
         if (parse_number(buf, &d->stall_from) || parse_number(colon + 1, &d->stall_to) ||
             !(d->stall_to > d->stall_from)) {
             snprintf(err, errlen, "--damage stall-joints=%s: expected T0:T1 with T0 < T1", value);
-            return -1;
+            return -EINVAL;
         }
         return 0;
     }
@@ -59,7 +59,7 @@ int loadid_damage_parse(loadid_damage_t *d, const char *spec, char *err, size_t 
             double p;
             if (parse_number(value, &p) || p < 0 || p > 1) {
                 snprintf(err, errlen, "--damage %s: expected a probability in [0, 1]", spec);
-                return -1;
+                return -EINVAL;
             }
             d->p[k] = p;
             return 0;
@@ -69,7 +69,7 @@ int loadid_damage_parse(loadid_damage_t *d, const char *spec, char *err, size_t 
              "--damage %.*s: unknown kind (drop-frames, skip-samples, bit-errors, saturate, "
              "fault, bad-frames, nan-joints, stall-joints)",
              (int)klen, spec);
-    return -1;
+    return -EINVAL;
 }
 
 int loadid_damage_now(loadid_damage_t *d, int kind) {

@@ -48,7 +48,7 @@ typedef struct {
 
 void loadid_damage_init(loadid_damage_t *d, uint64_t seed);
 
-/* Parses one KIND=VALUE. Returns 0 or -1 with a message in err. */
+/* Parses one KIND=VALUE. Returns 0 or -EINVAL with a message in err. */
 int loadid_damage_parse(loadid_damage_t *d, const char *spec, char *err, size_t errlen);
 
 /* Draws whether damage of this kind happens now (and counts it). */

@@ -325,9 +325,12 @@ int loadid_sim_run(const loadid_sim_options_t *o, loadid_sim_summary_t *sum, cha
                 s->traj.rho[i][k] *= scale;
                 s->traj.delta[i][k] *= scale;
             }
-    if (s->cfg.sim_zero && s->cfg.sim_still_s < ZERO_AT_S + s->cfg.zeroing_window_s)
-        fprintf(stderr, "loadid-sim: warning: simulation.still_s %.3g s leaves less than "
-                        "zeroing.window_s after ZERO at %.2f s\n", s->cfg.sim_still_s, ZERO_AT_S);
+    if (o->warn && s->cfg.sim_zero && s->cfg.sim_still_s < ZERO_AT_S + s->cfg.zeroing_window_s) {
+        char msg[160];
+        snprintf(msg, sizeof msg, "simulation.still_s %.3g s leaves less than zeroing.window_s "
+                                  "after ZERO at %.2f s", s->cfg.sim_still_s, ZERO_AT_S);
+        o->warn(o->warn_ctx, msg);
+    }
     int rc = loadid_kin_create(&s->chain, s->cfg.robot_gravity, &s->kin);
     if (rc != 0) return fail(s, err, errlen, rc, "cannot build the kinematics");
     loadid_setup_jr3(&s->cfg, &s->jr3);

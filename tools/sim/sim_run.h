@@ -54,6 +54,8 @@ typedef struct {
     uint64_t seed;
     int64_t start_utime;               /* time of the first joint state [us] */
     loadid_damage_t damage;            /* probabilities and stall window */
+    void (*warn)(void *ctx, const char *msg); /* a one-line warning; may be NULL */
+    void *warn_ctx;
 } loadid_sim_options_t;
 
 typedef struct {

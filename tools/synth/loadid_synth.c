@@ -3,6 +3,7 @@
 
 #define LOADID_PI 3.14159265358979323846
 
+#include <errno.h>
 #include <math.h>
 #include <string.h>
 
@@ -149,7 +150,7 @@ static void elementary(int ax, const double q[3], mat3 R, mat3 Rd, mat3 Rdd) {
 }
 
 int loadid_synth_motion(const loadid_synth_traj_t *traj, double t, int still, loadid_motion_t *out) {
-    if (!traj || !out) return -1;
+    if (!traj || !out) return -EINVAL;
     double q[6][3];
     for (int i = 0; i < 6; ++i) coordinate(traj, i, t, still, q[i]);
     mat3 A, Ad, Add, B, Bd, Bdd, C, Cd, Cdd;
@@ -227,7 +228,7 @@ void loadid_synth_wrench(const double phi[10], const loadid_motion_t *m, double 
 int loadid_synth_sample(const loadid_synth_traj_t *traj, const double phi[10], double t, int still,
                         const loadid_synth_noise_t *noise, loadid_rng_t *rng,
                         loadid_synth_sample_t *out) {
-    if (!traj || !phi || !out || (noise && !rng)) return -1;
+    if (!traj || !phi || !out || (noise && !rng)) return -EINVAL;
     loadid_synth_motion(traj, t, still, &out->truth);
     loadid_synth_wrench(phi, &out->truth, out->wrench_true);
     out->meas = out->truth;

@@ -59,7 +59,7 @@ typedef struct {
 void loadid_synth_traj_default(loadid_synth_traj_t *traj, uint64_t seed);
 
 /* The state of S at time t [s]. still != 0 evaluates the pose q_0 at rest
- * (the zeroing pose). Returns 0, or -1 for NULL pointers. */
+ * (the zeroing pose). Returns 0, or -EINVAL for NULL pointers. */
 int loadid_synth_motion(const loadid_synth_traj_t *traj, double t, int still,
                         loadid_motion_t *out);
 
@@ -86,7 +86,7 @@ typedef struct {
 } loadid_synth_sample_t;
 
 /* One measurement at time t of a load phi on trajectory traj. noise may be
- * NULL (exact data). Draws from rng in a fixed order. Returns 0 or -1. */
+ * NULL (exact data). Draws from rng in a fixed order. Returns 0 or -EINVAL. */
 int loadid_synth_sample(const loadid_synth_traj_t *traj, const double phi[10], double t, int still,
                         const loadid_synth_noise_t *noise, loadid_rng_t *rng,
                         loadid_synth_sample_t *out);

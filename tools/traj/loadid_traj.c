@@ -24,6 +24,12 @@
 
 static const char *prog = "loadid-traj";
 
+/* A warning of the configuration (another program's section). */
+static void warn_line(void *ctx, const char *msg) {
+    (void)ctx;
+    fprintf(stderr, "%s: warning: %s\n", prog, msg);
+}
+
 static void usage(FILE *out) {
     fprintf(out,
             "usage: %s [--config FILE] [--out TRAJ.yaml] [--setpoints FILE.csv]\n"
@@ -116,7 +122,12 @@ int main(int argc, char **argv) {
 
     loadid_config_t cfg;
     loadid_chain_t chain;
-    if (loadid_setup_load(prog, config_path, &cfg, &chain) != 0) return 1;
+    char setup_err[1200];
+    if (loadid_setup_load(config_path, &cfg, &chain, warn_line, NULL, setup_err,
+                          sizeof setup_err) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, setup_err);
+        return 1;
+    }
     if (seed >= 0) cfg.traj_seed = (uint64_t)seed;
     if (mc > 0) cfg.traj_monte_carlo = (int)mc;
     if (cand > 0) cfg.traj_candidates = (int)cand;

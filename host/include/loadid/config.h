@@ -302,17 +302,19 @@ void loadid_config_channel(const loadid_config_t *cfg, const char *name, char *o
 /* Called for each warning (another program's section); msg is a full line. */
 typedef void (*loadid_config_warn_fn)(void *ctx, const char *msg);
 
-/* Reads path into cfg (defaults first, then the file). Returns 0, or -1
- * with a one-line message in err ("FILE:LINE: KEY: what is wrong", or
- * "FILE: cannot read: reason"; err may be NULL when errlen is 0), cfg then
- * unchanged. warn may be NULL; it is called only on success. */
+/* Reads path into cfg (defaults first, then the file). Returns 0, or a
+ * negative code with a one-line message in err, cfg then unchanged:
+ * -EINVAL "FILE:LINE: KEY: what is wrong" (or an invalid argument),
+ * -errno "FILE: cannot read: reason" (-ENOENT, -EISDIR, ...), -ENOMEM;
+ * err may be NULL when errlen is 0. warn may be NULL; it is called only
+ * on success. */
 int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t errlen,
                        loadid_config_warn_fn warn, void *warn_ctx);
 
 /* The same from text in memory (len bytes, need not be NUL-terminated),
  * as if it were the file at path (named in messages; relative paths in it
  * are resolved against its folder; nothing is read from disk). For the
- * fuzzer and tests. Returns 0 or -1 as loadid_config_load. */
+ * fuzzer and tests. Returns 0, -EINVAL or -ENOMEM as loadid_config_load. */
 int loadid_config_load_string(const char *path, const char *text, size_t len,
                               loadid_config_t *cfg, char *err, size_t errlen,
                               loadid_config_warn_fn warn, void *warn_ctx);

@@ -1,9 +1,8 @@
 /*
  * What every loadid program derives from the configuration, in one place:
- * the configuration and the robot's chain (errors as one line "PROG:
- * reason" on stderr), the JR3 codec's settings, the joint filters' and
- * signal sources' settings, and the estimators' weights for a signal
- * source. loadidd, its pipeline and the tools all use these, so they see
+ * the configuration and the robot's chain, the JR3 codec's settings, the
+ * joint filters' and signal sources' settings, and the estimators' weights
+ * for a signal source. loadidd, its pipeline and the tools all use these, so they see
  * the same numbers.
  */
 #ifndef LOADID_SETUP_H
@@ -18,12 +17,15 @@
 extern "C" {
 #endif
 
-/* cfg from config_path (NULL: the defaults; other programs' sections are
- * printed as warnings), then chain from cfg's robot.* keys (a URDF that
- * cannot be used is reported after robot_urdf_origin, the file, line and
- * key that named it). Returns 0, or 1 after printing why. */
-int loadid_setup_load(const char *prog, const char *config_path, loadid_config_t *cfg,
-                      loadid_chain_t *chain);
+/* cfg from config_path (NULL: the defaults; another program's section in
+ * the file is a warning, for warn, which may be NULL), then chain from
+ * cfg's robot.* keys. Returns 0, or the configuration's or the URDF
+ * reader's negative code (loadid_error_text) with a one-line reason in
+ * err: "FILE:LINE: KEY: what", or for a URDF that cannot be used the
+ * file, line and key that named it (robot_urdf_origin) before the
+ * reader's reason. */
+int loadid_setup_load(const char *config_path, loadid_config_t *cfg, loadid_chain_t *chain,
+                      loadid_config_warn_fn warn, void *warn_ctx, char *err, size_t errlen);
 
 /* The JR3 codec: can.base_id and jr3.full_scale.*. */
 void loadid_setup_jr3(const loadid_config_t *cfg, loadid_jr3_config_t *jr3);

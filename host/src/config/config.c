@@ -808,7 +808,7 @@ static int load_doc(loadid_yaml_doc_t *doc, const char *path, loadid_config_t *c
     if (!c) {
         if (err && errlen) snprintf(err, errlen, "%s: out of memory", path);
         loadid_yaml_free(doc);
-        return -1;
+        return -ENOMEM;
     }
     loadid_config_default(c);
     loadid_yaml_node_t *root = loadid_yaml_root(doc);
@@ -845,7 +845,7 @@ fail:
     if (err && errlen) snprintf(err, errlen, "%s", loadid_yaml_error(doc));
     free(c);
     loadid_yaml_free(doc);
-    return -1;
+    return -EINVAL;
 }
 
 int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t errlen,
@@ -853,10 +853,11 @@ int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t
     if (err && errlen) err[0] = '\0';
     if (!path || !cfg) {
         if (err && errlen) snprintf(err, errlen, "loadid_config_load: invalid argument");
-        return -1;
+        return -EINVAL;
     }
     loadid_yaml_doc_t *doc = NULL;
-    if (loadid_yaml_load_file(path, &doc, err, errlen) < 0) return -1;
+    const int rc = loadid_yaml_load_file(path, &doc, err, errlen);
+    if (rc < 0) return rc;
     return load_doc(doc, path, cfg, err, errlen, warn, warn_ctx);
 }
 
@@ -866,10 +867,11 @@ int loadid_config_load_string(const char *path, const char *text, size_t len,
     if (err && errlen) err[0] = '\0';
     if (!path || (!text && len) || !cfg) {
         if (err && errlen) snprintf(err, errlen, "loadid_config_load_string: invalid argument");
-        return -1;
+        return -EINVAL;
     }
     loadid_yaml_doc_t *doc = NULL;
-    if (loadid_yaml_load_string(path, text, len, &doc, err, errlen) < 0) return -1;
+    const int rc = loadid_yaml_load_string(path, text, len, &doc, err, errlen);
+    if (rc < 0) return rc;
     return load_doc(doc, path, cfg, err, errlen, warn, warn_ctx);
 }
 

@@ -7,27 +7,18 @@
 
 #include "loadid/urdf.h"
 
-static void warn(void *ctx, const char *msg) {
-    fprintf(stderr, "%s: warning: %s\n", (const char *)ctx, msg);
-}
-
-int loadid_setup_load(const char *prog, const char *config_path, loadid_config_t *cfg,
-                      loadid_chain_t *chain) {
-    char err[1024];
+int loadid_setup_load(const char *config_path, loadid_config_t *cfg, loadid_chain_t *chain,
+                      loadid_config_warn_fn warn, void *warn_ctx, char *err, size_t errlen) {
     loadid_config_default(cfg);
-    if (config_path &&
-        loadid_config_load(config_path, cfg, err, sizeof err, warn, (void *)prog) != 0) {
-        fprintf(stderr, "%s: %s\n", prog, err);
-        return 1;
-    }
-    if (loadid_urdf_load_file(cfg->robot_urdf, cfg->robot_base_link, cfg->robot_sensor_link, chain,
-                              err, sizeof err) != 0) {
-        /* The key and line that named the file: the URDF reader knows
-         * only the file. */
-        fprintf(stderr, "%s: %s: %s\n", prog, cfg->robot_urdf_origin, err);
-        return 1;
-    }
-    return 0;
+    int rc = config_path ? loadid_config_load(config_path, cfg, err, errlen, warn, warn_ctx) : 0;
+    if (rc != 0) return rc;
+    char why[1024];
+    rc = loadid_urdf_load_file(cfg->robot_urdf, cfg->robot_base_link, cfg->robot_sensor_link,
+                               chain, why, sizeof why);
+    /* The key and line that named the file: the URDF reader knows only
+     * the file. */
+    if (rc != 0) snprintf(err, errlen, "%s: %s", cfg->robot_urdf_origin, why);
+    return rc;
 }
 
 void loadid_setup_jr3(const loadid_config_t *cfg, loadid_jr3_config_t *jr3) {

@@ -47,6 +47,12 @@
 
 static const char *prog = "loadidd";
 
+/* A warning of the configuration (another program's section). */
+static void warn_line(void *ctx, const char *msg) {
+    (void)ctx;
+    fprintf(stderr, "%s: warning: %s\n", prog, msg);
+}
+
 static void usage(FILE *out) {
     fprintf(out,
             "usage: %s --config FILE --offline RECORDING_DIR [--result OUT.json]\n"
@@ -326,7 +332,12 @@ int main(int argc, char **argv) {
     }
     static loadid_config_t cfg;
     loadid_chain_t chain;
-    if (loadid_setup_load(prog, config_path, &cfg, &chain) != 0) return 1;
+    char setup_err[1200];
+    if (loadid_setup_load(config_path, &cfg, &chain, warn_line, NULL, setup_err,
+                          sizeof setup_err) != 0) {
+        fprintf(stderr, "%s: %s\n", prog, setup_err);
+        return 1;
+    }
     if (!offline) {
         loadid_live_options_t live = {.can_file = can_file, .can_file_epoch = epoch,
                                       .replay = replay, .replay_commands = replay_commands,

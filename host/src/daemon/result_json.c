@@ -1,6 +1,7 @@
 /* JSON result of loadidd --offline (result_json.h). */
 #include "result_json.h"
 
+#include <errno.h>
 #include <math.h>
 
 #include "loadid/core.h"
@@ -141,5 +142,5 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
         fprintf(out, "}%s\n", i + 1 < n ? "," : "");
     }
     fputs("]\n", out);
-    return ferror(out) ? -1 : 0;
+    return ferror(out) ? -EIO : 0;
 }

@@ -14,7 +14,7 @@
  * of its covariance), "model" (mass, com, inertia_com of model_phi) and
  * "noise" (the levels the on-line weights used, and where each came from);
  * REFINED's also "refined" (its sources and levels; ref may be NULL).
- * Returns 0 or -1 (stdio error). */
+ * Returns 0 or -EIO (a stdio error; errno says which). */
 int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, int n,
                              const loadid_pipeline_status_t *st,
                              const loadid_refined_report_t *ref);

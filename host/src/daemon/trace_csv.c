@@ -50,7 +50,7 @@ int loadid_trace_csv_close(loadid_trace_csv_t *t, char *err, size_t errlen) {
     t->out = NULL;
     if (bad || rc != 0) {
         snprintf(err, errlen, "cannot write %s: %s", t->path, strerror(e));
-        return -1;
+        return -e;
     }
     return 0;
 }

@@ -41,8 +41,8 @@ void loadid_trace_csv_start(loadid_trace_csv_t *t, int64_t utime);
 /* One row (the pipeline's estimate sink). */
 void loadid_trace_csv_row(loadid_trace_csv_t *t, const loadid_pipeline_estimate_t *e);
 
-/* Closes the file. Returns 0, or -1 with "cannot write PATH: reason" in
- * err when a write failed. */
+/* Closes the file. Returns 0, or -errno with "cannot write PATH: reason"
+ * in err when a write failed. */
 int loadid_trace_csv_close(loadid_trace_csv_t *t, char *err, size_t errlen);
 
 #endif /* LOADID_TRACE_CSV_H */

@@ -136,7 +136,10 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
                            const loadid_pipeline_sink_t *sink, int publish_every,
                            loadid_pipeline_t **out, char *err, size_t errlen) {
     loadid_pipeline_t *p = calloc(1, sizeof *p);
-    if (!p) return -ENOMEM;
+    if (!p) {
+        snprintf(err, errlen, "out of memory");
+        return -ENOMEM;
+    }
     p->cfg = *cfg;
     if (sink) p->sink = *sink;
     p->publish_every = publish_every < 0 ? 0 : publish_every;
