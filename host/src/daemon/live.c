@@ -256,7 +256,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         loadidd_log("%s", err);
         rc = 1;
     }
-    if (rc == 0) loadid_notify_ready("estimating loads; LCM and CAN open");
+    if (rc == 0) loadid_notify_ready("estimating loads; LCM and the sensor input open");
     while (rc == 0) {
         struct epoll_event evs[8];
         int n = epoll_wait(ep, evs, 8, 1000);
