@@ -40,7 +40,7 @@ static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *er
     can_t *c = calloc(1, sizeof *c);
     if (!c) {
         snprintf(err, errlen, "out of memory");
-        return -1;
+        return -ENOMEM;
     }
     in->state = c;
     char why[512];
