@@ -139,14 +139,16 @@ def test_sensor_lost_and_found_counted_as_it_happened(session, capsys):
     assert 0 <= late <= 2, (d, b)
     assert d["bad frames"] == d["CRC"] == b["bad_crc"], (d, b)
     assert d["exceptions"] == d["malformed"] == d["rejected"] == 0, d
-    # The read in flight when the daemon stops can be answered (the sensor
-    # counts it, and the gap before it) and never handed over: one sample
-    # and its gap may be missing (seen in 2 of about 10 runs under load).
-    inflight = 1
+    # The read in flight when a sensor goes (three times) can be answered
+    # (the sensor counts it, and the gap before it) and never reach the
+    # daemon: up to one sample per sensor may be missing, and its gap, one
+    # skipped measurement (1 kHz served, polled at 500 Hz) or two after a
+    # late read (seen: 2-3 gaps fewer in 2 of about 12 runs under load).
+    inflight = len(session["sensors"])
     assert sum(t["different"] for t in (a, b, c)) - late - inflight <= d["samples ok"] <= \
         sum(t["different"] for t in (a, b, c)), (d, a, b, c)
     gaps = sum(t["last"] - t["first"] + 1 - t["different"] for t in (a, b, c))
-    assert gaps - inflight <= d["gaps"] <= gaps + late, (d["gaps"], gaps)
+    assert gaps - 2 * inflight <= d["gaps"] <= gaps + late, (d["gaps"], gaps)
     last = session["status"][-1]  # published at exit, after the summary
     assert last["samples_incomplete"] == d["timeouts"] > 0, last
     assert last["frames_bad"] == d["bad frames"] > 0, last
