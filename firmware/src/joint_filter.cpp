@@ -14,10 +14,13 @@
 // after loadid_jf_create.
 #include "loadid/joint_filter.h"
 
+#include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <new>
+#include <utility>
 
 #include "finite.hpp"
 #include "joint_filter_steady.hpp"
@@ -69,9 +72,28 @@ void initialise(Gauss &g, Real z, const loadid_jf_config_t &c) {
     g.P[2][2] = c.init_sigma_acc * c.init_sigma_acc;
 }
 
-// Time update over dt > 0 ([BLK] 6.2.3, 5.2): x <- F x, P <- F P F^T + Q.
-void predict(Gauss &g, Real dt, Real jerk_psd) {
+// The model over a step dt > 0 ([BLK] 6.2.3): F(dt) and jerk_psd Q(dt),
+// the same for every joint of an update.
+struct Step {
+    Real dt, h;    // F(dt) = [1 dt h; 0 1 dt; 0 0 1], h = dt^2 / 2
+    Real Q[3][3];  // jerk_psd Q(dt)
+};
+
+Step step_of(Real dt, Real jerk_psd) {
     const Real h = dt * dt / 2;
+    const Real dt2 = dt * dt, dt3 = dt2 * dt;
+    const Real Q[3][3] = {{dt3 * dt2 / 20, dt2 * dt2 / 8, dt3 / 6},
+                          {dt2 * dt2 / 8, dt3 / 3, dt2 / 2},
+                          {dt3 / 6, dt2 / 2, dt}};
+    Step m{dt, h, {}};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) m.Q[i][j] = jerk_psd * Q[i][j];
+    return m;
+}
+
+// Time update ([BLK] 6.2.3, 5.2): x <- F x, P <- F P F^T + Q.
+void predict(Gauss &g, const Step &m) {
+    const Real dt = m.dt, h = m.h;
     const Real F[3][3] = {{1, dt, h}, {0, 1, dt}, {0, 0, 1}};
     g.x[0] += dt * g.x[1] + h * g.x[2];
     g.x[1] += dt * g.x[2];
@@ -79,15 +101,13 @@ void predict(Gauss &g, Real dt, Real jerk_psd) {
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
             FP[i][j] = F[i][0] * g.P[0][j] + F[i][1] * g.P[1][j] + F[i][2] * g.P[2][j];
-    const Real dt2 = dt * dt, dt3 = dt2 * dt;
-    const Real Q[3][3] = {{dt3 * dt2 / 20, dt2 * dt2 / 8, dt3 / 6},
-                          {dt2 * dt2 / 8, dt3 / 3, dt2 / 2},
-                          {dt3 / 6, dt2 / 2, dt}};
     for (int i = 0; i < 3; ++i)
         for (int j = i; j < 3; ++j)  // upper triangle of F P F^T + Q, mirrored
             g.P[i][j] = g.P[j][i] = FP[i][0] * F[j][0] + FP[i][1] * F[j][1] + FP[i][2] * F[j][2] +
-                                    jerk_psd * Q[i][j];
+                                    m.Q[i][j];
 }
+
+void predict(Gauss &g, Real dt, Real jerk_psd) { predict(g, step_of(dt, jerk_psd)); }
 
 // Measurement update with z = q + v, var(v) = r, H = [1 0 0] ([BLK] 5.2):
 // K = P H^T / s, s = H P H^T + r; x <- x + K (z - H x); and P in Joseph
@@ -145,6 +165,85 @@ Gauss load(const Real *w) {
     return Gauss{{w[0], w[1], w[2]}, {{w[3], w[4], w[5]}, {w[4], w[6], w[7]}, {w[5], w[7], w[8]}}};
 }
 
+// The on-line filters of all joints, joint index last (x[c][i], P[r][c][i],
+// both triangles of P): an update is predict and correct above, written
+// out element by element with the same operations in the same order (the
+// same bits), in loops over the joints that the compiler vectorises, two
+// joints at a time (the filters of one joint were a chain of divisions
+// waiting on each other).
+struct Bank {
+    Real x[3][kMaxJoints];
+    Real P[3][3][kMaxJoints];
+
+    void set(int i, const Gauss &g) {
+        for (int r = 0; r < 3; ++r) {
+            x[r][i] = g.x[r];
+            for (int c = 0; c < 3; ++c) P[r][c][i] = g.P[r][c];
+        }
+    }
+
+    // predict(g, m) for each joint.
+    void predict_all(int n, const Step &m) {
+        const Real dt = m.dt, h = m.h;
+        const Real F[3][3] = {{1, dt, h}, {0, 1, dt}, {0, 0, 1}};
+        for (int i = 0; i < n; ++i) {
+            x[0][i] += dt * x[1][i] + h * x[2][i];
+            x[1][i] += dt * x[2][i];
+            const Real p00 = P[0][0][i], p01 = P[0][1][i], p02 = P[0][2][i];
+            const Real p10 = P[1][0][i], p11 = P[1][1][i], p12 = P[1][2][i];
+            const Real p20 = P[2][0][i], p21 = P[2][1][i], p22 = P[2][2][i];
+            // FP[a][b] = F[a][0] P[0][b] + F[a][1] P[1][b] + F[a][2] P[2][b]
+            const Real fp00 = F[0][0] * p00 + F[0][1] * p10 + F[0][2] * p20;
+            const Real fp01 = F[0][0] * p01 + F[0][1] * p11 + F[0][2] * p21;
+            const Real fp02 = F[0][0] * p02 + F[0][1] * p12 + F[0][2] * p22;
+            const Real fp10 = F[1][0] * p00 + F[1][1] * p10 + F[1][2] * p20;
+            const Real fp11 = F[1][0] * p01 + F[1][1] * p11 + F[1][2] * p21;
+            const Real fp12 = F[1][0] * p02 + F[1][1] * p12 + F[1][2] * p22;
+            const Real fp20 = F[2][0] * p00 + F[2][1] * p10 + F[2][2] * p20;
+            const Real fp21 = F[2][0] * p01 + F[2][1] * p11 + F[2][2] * p21;
+            const Real fp22 = F[2][0] * p02 + F[2][1] * p12 + F[2][2] * p22;
+            // P[a][b] = FP[a][0] F[b][0] + FP[a][1] F[b][1] + FP[a][2] F[b][2] + Q[a][b], b >= a
+            const Real q00 = fp00 * F[0][0] + fp01 * F[0][1] + fp02 * F[0][2] + m.Q[0][0];
+            const Real q01 = fp00 * F[1][0] + fp01 * F[1][1] + fp02 * F[1][2] + m.Q[0][1];
+            const Real q02 = fp00 * F[2][0] + fp01 * F[2][1] + fp02 * F[2][2] + m.Q[0][2];
+            const Real q11 = fp10 * F[1][0] + fp11 * F[1][1] + fp12 * F[1][2] + m.Q[1][1];
+            const Real q12 = fp10 * F[2][0] + fp11 * F[2][1] + fp12 * F[2][2] + m.Q[1][2];
+            const Real q22 = fp20 * F[2][0] + fp21 * F[2][1] + fp22 * F[2][2] + m.Q[2][2];
+            P[0][0][i] = q00, P[0][1][i] = P[1][0][i] = q01, P[0][2][i] = P[2][0][i] = q02;
+            P[1][1][i] = q11, P[1][2][i] = P[2][1][i] = q12, P[2][2][i] = q22;
+        }
+    }
+
+    // correct(g, z[i], r) for each joint.
+    void correct_all(int n, const Real *z, Real r) {
+        for (int i = 0; i < n; ++i) {
+            const Real p00 = P[0][0][i], p01 = P[0][1][i], p02 = P[0][2][i];
+            const Real p10 = P[1][0][i], p11 = P[1][1][i], p12 = P[1][2][i];
+            const Real p20 = P[2][0][i], p22 = P[2][2][i];  // P[2][1] is not read
+            const Real s = p00 + r;
+            const Real k0 = p00 / s, k1 = p10 / s, k2 = p20 / s;
+            const Real e = z[i] - x[0][i];
+            x[0][i] += k0 * e;
+            x[1][i] += k1 * e;
+            x[2][i] += k2 * e;
+            const Real a0 = r / s, a1 = -k1, a2 = -k2;
+            // AP: row 0 a0 P[0], row c P[c] + a_c P[0]
+            const Real ap00 = a0 * p00, ap01 = a0 * p01, ap02 = a0 * p02;
+            const Real ap10 = p10 + a1 * p00, ap11 = p11 + a1 * p01, ap12 = p12 + a1 * p02;
+            const Real ap20 = p20 + a2 * p00, ap22 = p22 + a2 * p02;  // AP[2][1] is not needed
+            // P[a][b] = (b == 0 ? AP[a][0] a0 : AP[a][b] + AP[a][0] a_b) + r K[a] K[b]
+            const Real q00 = ap00 * a0 + r * k0 * k0;
+            const Real q01 = ap01 + ap00 * a1 + r * k0 * k1;
+            const Real q02 = ap02 + ap00 * a2 + r * k0 * k2;
+            const Real q11 = ap11 + ap10 * a1 + r * k1 * k1;
+            const Real q12 = ap12 + ap10 * a2 + r * k1 * k2;
+            const Real q22 = ap22 + ap20 * a2 + r * k2 * k2;
+            P[0][0][i] = q00, P[0][1][i] = P[1][0][i] = q01, P[0][2][i] = P[2][0][i] = q02;
+            P[1][1][i] = q11, P[1][2][i] = P[2][1][i] = q12, P[2][2][i] = q22;
+        }
+    }
+};
+
 }  // namespace
 
 // The fixed-lag smoother's history: per update its time, the piece of the
@@ -156,21 +255,28 @@ struct LagEntry {
     int64_t t;
     int piece;
     int seq;  // updates before it since the filter's (re)start (capped): settled from settle on
-    Real xpred[kMaxJoints][3];
-    Real nu[kMaxJoints];
+    Real xpred[3][kMaxJoints];  // x(j|j-1): xpred[c][i], component c of joint i
+    // Its smoothed state so far, x(j|j-1) + sum_{k < terms} B_k nu(j+k)
+    // (terms -1: not begun): a sample extends the sum with the updates
+    // that came since the last, the same additions in the same order.
+    int terms;
+    Real xs[3][kMaxJoints];
 };
 
 struct loadid_jf {
     loadid_jf_config_t cfg;
     int n;
     int64_t last;  // INT64_MIN: no measurement since create or reset
-    Gauss joint[kMaxJoints];
+    Bank joints;
     // Fixed-lag smoothing (cfg.lag_steps > 0): gains B_i, i = 0..lag, and
-    // the ring of the last kRing updates.
+    // the ring of the last kRing updates, their innovations apart (a
+    // smoothed state walks lag of them: a cache line each).
     Real gain[LOADID_JF_MAX_LAG + 1][3];
     LagEntry ring[kRing];
+    Real nu[kRing][kMaxJoints];
     int ring_head, ring_count;  // the oldest entry, and how many
     int piece;                  // the current piece of the series
+    int piece_entries;          // its entries, at the ring's end
     int64_t piece_start;        // the time of its first update (no entry)
     int since_start;            // updates since the filter's (re)start (capped)
     int settle;                 // loadid_jf_settle_steps
@@ -200,7 +306,7 @@ extern "C" int loadid_jf_create(int num_joints, const loadid_jf_config_t *cfg, l
     jf->n = num_joints;
     jf->last = INT64_MIN;
     jf->ring_head = jf->ring_count = 0;
-    jf->piece = jf->since_start = 0;
+    jf->piece = jf->piece_entries = jf->since_start = 0;
     jf->settle = loadid::settle_steps(
         *cfg, double(cfg->nominal_step_us > 0 ? cfg->nominal_step_us : 1000) * 1e-6);
     if (cfg->lag_steps > 0) {
@@ -219,8 +325,26 @@ extern "C" int loadid_jf_reset(loadid_jf_t *jf) {
     if (!jf) return -EINVAL;
     jf->last = INT64_MIN;
     jf->ring_head = jf->ring_count = 0;
-    jf->piece = jf->since_start = 0;
+    jf->piece = jf->piece_entries = jf->since_start = 0;
     return 0;
+}
+
+// A new entry of the current piece at the ring's end (the ring keeps the
+// last kRing updates), its predicted state the filters' now and its
+// innovations z - x(k|k-1) (0 for a first update).
+static void push_entry(loadid_jf_t *jf, int64_t t_us, int seq, const Real *z) {
+    if (jf->ring_count == kRing) jf->ring_head = (jf->ring_head + 1) % kRing;
+    else ++jf->ring_count;
+    const int slot = (jf->ring_head + jf->ring_count - 1) % kRing;
+    LagEntry *e = &jf->ring[slot];
+    e->t = t_us;
+    e->piece = jf->piece;
+    e->seq = seq;
+    e->terms = -1;
+    for (int c = 0; c < 3; ++c)
+        for (int i = 0; i < jf->n; ++i) e->xpred[c][i] = jf->joints.x[c][i];
+    for (int i = 0; i < jf->n; ++i) jf->nu[slot][i] = z ? z[i] - jf->joints.x[0][i] : Real(0);
+    jf->piece_entries = std::min(jf->piece_entries + 1, jf->ring_count);
 }
 
 extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real_t *q) {
@@ -231,45 +355,24 @@ extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real
     const Real r = jf->cfg.meas_sigma * jf->cfg.meas_sigma;
     const int lag = jf->cfg.lag_steps;
     if (first || is_gap(jf->last, t_us, jf->cfg)) {
-        for (int i = 0; i < jf->n; ++i) initialise(jf->joint[i], q[i], jf->cfg);
+        for (int i = 0; i < jf->n; ++i) {
+            Gauss g;
+            initialise(g, q[i], jf->cfg);
+            jf->joints.set(i, g);
+        }
         // The smoother restarts with the filter; the last piece's updates
         // stay (smoothed with what came after them in it) until pushed out.
         // The first update is an entry too (its state, no innovation), so
         // a sample just after it is served from it, as the filter would.
         ++jf->piece;
+        jf->piece_entries = 0;
         jf->piece_start = t_us;
         jf->since_start = 0;
-        if (lag > 0) {
-            if (jf->ring_count == kRing) jf->ring_head = (jf->ring_head + 1) % kRing;
-            else ++jf->ring_count;
-            LagEntry *e = &jf->ring[(jf->ring_head + jf->ring_count - 1) % kRing];
-            e->t = t_us;
-            e->piece = jf->piece;
-            e->seq = 0;
-            for (int i = 0; i < jf->n; ++i) {
-                for (int c = 0; c < 3; ++c) e->xpred[i][c] = jf->joint[i].x[c];
-                e->nu[i] = 0;
-            }
-        }
+        if (lag > 0) push_entry(jf, t_us, 0, nullptr);
     } else {
-        const Real dt = seconds(jf->last, t_us);
-        LagEntry *e = nullptr;
-        if (lag > 0) {  // the ring keeps the last kRing updates
-            if (jf->ring_count == kRing) jf->ring_head = (jf->ring_head + 1) % kRing;
-            else ++jf->ring_count;
-            e = &jf->ring[(jf->ring_head + jf->ring_count - 1) % kRing];
-            e->t = t_us;
-            e->piece = jf->piece;
-            e->seq = jf->since_start;
-        }
-        for (int i = 0; i < jf->n; ++i) {
-            predict(jf->joint[i], dt, jf->cfg.jerk_psd);
-            if (e) {
-                for (int c = 0; c < 3; ++c) e->xpred[i][c] = jf->joint[i].x[c];
-                e->nu[i] = q[i] - jf->joint[i].x[0];
-            }
-            correct(jf->joint[i], q[i], r);
-        }
+        jf->joints.predict_all(jf->n, step_of(seconds(jf->last, t_us), jf->cfg.jerk_psd));
+        if (lag > 0) push_entry(jf, t_us, jf->since_start, q);
+        jf->joints.correct_all(jf->n, q, r);
     }
     jf->last = t_us;
     if (jf->since_start < INT32_MAX) ++jf->since_start;
@@ -283,7 +386,7 @@ extern "C" int loadid_jf_state_at(const loadid_jf_t *jf, int64_t t_us, loadid_re
     // x(t) = F(dt) x: the model's mean, forwards or backwards.
     const Real dt = seconds(jf->last, t_us), h = dt * dt / 2;
     for (int i = 0; i < jf->n; ++i) {
-        const Real *x = jf->joint[i].x;
+        const Real x[3] = {jf->joints.x[0][i], jf->joints.x[1][i], jf->joints.x[2][i]};
         if (q) q[i] = x[0] + dt * x[1] + h * x[2];
         if (qd) qd[i] = x[1] + dt * x[2];
         if (qdd) qdd[i] = x[2];
@@ -302,6 +405,7 @@ extern "C" int loadid_jf_end_piece(loadid_jf_t *jf) {
     if (!jf) return -EINVAL;
     if (jf->last == INT64_MIN) return 0;
     ++jf->piece;
+    jf->piece_entries = 0;
     jf->piece_start = jf->last + 1;  // what came before is served now
     return 0;  // the filter goes on: no settling
 }
@@ -312,12 +416,9 @@ extern "C" int loadid_jf_settled(const loadid_jf_t *jf) {
     return jf && jf->last != INT64_MIN && jf->since_start > jf->settle;
 }
 
-// Entries of the current piece at the ring's end.
-static int current_entries(const loadid_jf_t *jf) {
-    int k = 0;
-    while (k < jf->ring_count && ring_at(jf, jf->ring_count - 1 - k).piece == jf->piece) ++k;
-    return k;
-}
+// Entries of the current piece at the ring's end (kept as they come: the
+// walk back over the ring cost as much as the smoothing itself).
+static int current_entries(const loadid_jf_t *jf) { return jf->piece_entries; }
 
 extern "C" int64_t loadid_jf_lagged_time(const loadid_jf_t *jf) {
     if (!jf || jf->cfg.lag_steps <= 0 || jf->last == INT64_MIN) return INT64_MIN;
@@ -330,24 +431,69 @@ extern "C" int64_t loadid_jf_lagged_time(const loadid_jf_t *jf) {
     return INT64_MIN;
 }
 
-// Updates after ring entry j in its piece, at most lag.
+// Updates after ring entry j in its piece, at most lag. A piece's entries
+// are contiguous in the ring: the current piece runs to the ring's end,
+// and an older one has lag after j when entry j + lag is still in it.
 static int updates_after(const loadid_jf_t *jf, int j, int lag) {
     const int piece = ring_at(jf, j).piece;
+    if (piece == jf->piece) return std::min(lag, jf->ring_count - 1 - j);
+    if (j + lag < jf->ring_count && ring_at(jf, j + lag).piece == piece) return lag;
     int after = 0;
     while (j + after + 1 < jf->ring_count && after < lag && ring_at(jf, j + after + 1).piece == piece)
         ++after;
     return after;
 }
 
-// Joint i's state at ring entry j smoothed with the after updates that
-// follow it: x(j|j-1) + sum_k B_k nu(j+k).
-static void smoothed(const loadid_jf_t *jf, int j, int after, int i, Real x[3]) {
-    const LagEntry &e = ring_at(jf, j);
-    for (int c = 0; c < 3; ++c) x[c] = e.xpred[i][c];
-    for (int k = 0; k <= after; ++k) {
-        const Real nu = ring_at(jf, j + k).nu[i];
-        for (int c = 0; c < 3; ++c) x[c] += jf->gain[k][c] * nu;
+// Adds the terms k0..k1 of the smoothed sums of entry j to xs (below),
+// for N joints: a step is three multiply-adds over the joints, held in
+// registers, so the 3 N sums run side by side instead of one after another.
+template <int N>
+void add_terms(const loadid_jf_t *jf, int j, int k0, int k1, Real (&xs)[3][kMaxJoints]) {
+    Real acc[3][N];
+    for (int c = 0; c < 3; ++c)
+        for (int i = 0; i < N; ++i) acc[c][i] = xs[c][i];
+    int slot = (jf->ring_head + j + k0) % kRing;
+    for (int k = k0; k <= k1; ++k, slot = slot + 1 == kRing ? 0 : slot + 1) {
+        const Real *nu = jf->nu[slot];
+        const Real b0 = jf->gain[k][0], b1 = jf->gain[k][1], b2 = jf->gain[k][2];
+        for (int i = 0; i < N; ++i) {
+            acc[0][i] += b0 * nu[i];
+            acc[1][i] += b1 * nu[i];
+            acc[2][i] += b2 * nu[i];
+        }
     }
+    for (int c = 0; c < 3; ++c)
+        for (int i = 0; i < N; ++i) xs[c][i] = acc[c][i];
+}
+
+using AddTerms = void (*)(const loadid_jf_t *, int, int, int, Real (&)[3][kMaxJoints]);
+
+template <int... N>
+constexpr std::array<AddTerms, sizeof...(N)> add_terms_table(std::integer_sequence<int, N...>) {
+    return {{add_terms<N + 1>...}};
+}
+
+// add_terms for 1..kMaxJoints joints.
+constexpr std::array<AddTerms, kMaxJoints> kAddTerms =
+    add_terms_table(std::make_integer_sequence<int, kMaxJoints>{});
+
+// Every joint's state at ring entry j smoothed with the after updates that
+// follow it: x(j|j-1) + sum_k B_k nu(j+k), k = 0..after in that order
+// (xs[c][i]: component c of joint i). The entry keeps the sum: a later call
+// adds only the terms it lacks (the same additions in the same order as
+// the whole sum, so the same bits), and one asking for fewer terms than
+// it holds starts it again. The filter's const is the data's: the sums are
+// a cache (not for two threads).
+static const Real (&smoothed(const loadid_jf_t *jf, int j, int after))[3][kMaxJoints] {
+    LagEntry &e = const_cast<LagEntry &>(ring_at(jf, j));
+    if (e.terms < 0 || e.terms > after + 1) {
+        for (int c = 0; c < 3; ++c)
+            for (int i = 0; i < jf->n; ++i) e.xs[c][i] = e.xpred[c][i];
+        e.terms = 0;
+    }
+    if (e.terms <= after) kAddTerms[jf->n - 1](jf, j, e.terms, after, e.xs);
+    e.terms = after + 1;
+    return e.xs;
 }
 
 // The newest kept update at or before t serves it: with lag_steps updates
@@ -387,16 +533,17 @@ extern "C" int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, in
     const bool next = j + 1 < jf->ring_count && ring_at(jf, j + 1).piece == e0.piece &&
                       ring_at(jf, j + 1).t > t_us && t_us >= e0.t;
     const Real dt = seconds(e0.t, t_us), h = dt * dt / 2;
-    const Real w = next ? dt / seconds(e0.t, ring_at(jf, j + 1).t) : Real(0);
+    const Real step = next ? seconds(e0.t, ring_at(jf, j + 1).t) : Real(0);
+    const Real w = next ? dt / step : Real(0);
     const int after1 = next ? updates_after(jf, j + 1, lag) : 0;
+    const Real(&xs)[3][kMaxJoints] = smoothed(jf, j, after);
+    const Real *qdd1 = next ? smoothed(jf, j + 1, after1)[2] : nullptr;  // only its qdd is used
     for (int i = 0; i < jf->n; ++i) {
-        Real x[3], x1[3];
-        smoothed(jf, j, after, i, x);
+        const Real x[3] = {xs[0][i], xs[1][i], xs[2][i]};
         Real a = x[2], jerk = 0;
         if (next) {
-            smoothed(jf, j + 1, after1, i, x1);
-            a = (1 - w) * x[2] + w * x1[2];
-            jerk = (x1[2] - x[2]) / seconds(e0.t, ring_at(jf, j + 1).t);
+            a = (1 - w) * x[2] + w * qdd1[i];
+            jerk = (qdd1[i] - x[2]) / step;
         }
         // q and qd: the model's propagation with the interpolated jerk.
         if (q) q[i] = x[0] + dt * x[1] + h * x[2] + dt * h / 3 * jerk;
