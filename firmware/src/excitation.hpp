@@ -58,7 +58,11 @@ public:
         W.template leftCols<N>() = A;
         W.col(N) = y;
         W = d_.asDiagonal() * W * t_.asDiagonal();
-        gram_ = forgetting * gram_;
+        // x * 1 is x to the bit: without forgetting, no scaling.
+        if (forgetting != Real(1)) {
+            gram_ = forgetting * gram_;
+            gram_torque_ = forgetting * gram_torque_;
+        }
         // Only the lower triangle is computed and read (the eigen-solvers take
         // it): the Gram matrix is exactly symmetric, and half the work. The
         // loop sums in the order of Eigen's selfadjointView().rankUpdate()
@@ -67,7 +71,6 @@ public:
         // The torque rows' share is kept apart as well, for the covariance
         // (uncertainty.hpp): force and torque rows carry different residual
         // noise. gram_ itself keeps its summation order and bits.
-        gram_torque_ = forgetting * gram_torque_;
         for (int j = 0; j < N1; ++j)
             for (int i = j; i < N1; ++i) {
                 Real acc = 0, torque = 0;

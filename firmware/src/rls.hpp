@@ -35,6 +35,7 @@ public:
 
     void reweight() override {
         for (int i = 0; i < 6; ++i) lambda_(i) = cfg.row_sigma[i] * cfg.row_sigma[i];
+        inv_lambda_ = lambda_.cwiseInverse();
         excitation_.set_weights(row_weights(cfg), col_weights<N>(cfg));
         reset();
     }
@@ -88,7 +89,7 @@ private:
     // Eqs. (17)-(19), one row h (variance r) at a time, Bierman's update.
     void update_rls_ud(const ConstRegressorMap<N> &A, const Vec6 &y) {
         // Forgetting: Sigma / lambda before the update (eq. 17 with lambda Lambda).
-        D_ /= cfg.forgetting;
+        if (cfg.forgetting != Real(1)) D_ /= cfg.forgetting;  // x / 1 is x to the bit
         for (int row = 0; row < LOADID_NROWS; ++row) {
             const Vec<N> h = A.row(row).transpose();
             const Vec<N> f = U_.transpose().lazyProduct(h);
@@ -117,17 +118,19 @@ private:
     // Eqs. (20)-(22) in information form.
     void update_riv(const ConstRegressorMap<N> &B, const ConstRegressorMap<N> &C, const Vec6 &y) {
         const Real lam = cfg.forgetting;
-        const Eigen::Matrix<Real, N, 6> CtLi = C.transpose() * lambda_.cwiseInverse().asDiagonal();
-        M_ = lam * M_;
+        const Eigen::Matrix<Real, N, 6> CtLi = C.transpose() * inv_lambda_.asDiagonal();
+        if (lam != Real(1)) {  // x * 1 is x to the bit
+            M_ = lam * M_;
+            CC_ = lam * CC_;
+            b_ = lam * b_;
+        }
         M_.noalias() += CtLi.lazyProduct(B);
-        CC_ = lam * CC_;  // C^T W C: the instruments' part of RIV's covariance
-        CC_.noalias() += CtLi.lazyProduct(C);
-        b_ = lam * b_;
+        CC_.noalias() += CtLi.lazyProduct(C);  // C^T W C: the instruments' part of RIV's covariance
         b_.noalias() += CtLi * y;
     }
 
     const bool instrumental_;
-    Vec6 lambda_;
+    Vec6 lambda_, inv_lambda_;
     Vec<N> phi_;
     Eigen::Matrix<Real, N, N> M_;
     Eigen::Matrix<Real, N, N> CC_;
