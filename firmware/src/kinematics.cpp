@@ -16,10 +16,16 @@ using namespace loadid;
 
 namespace {
 
-// A fixed transform: x_parent = rot * x_child + xyz.
+// A fixed transform: x_parent = rot * x_child + xyz. Most of a URDF's are
+// a translation alone, or nothing (all of the RX60's): apply_fixed skips
+// the rotation by the identity and the move by 0, which change no value
+// but the sign of a zero (x * 1 and x + 0 are exact; products and sums
+// are all there is, so no other value can differ either).
 struct Fixed {
     Mat3 rot;
     Vec3 xyz;
+    bool rotates;  // rot is not the identity
+    bool moves;    // xyz is not 0
 };
 
 struct Joint {
@@ -34,6 +40,8 @@ Fixed fixed_from(const double xyz[3], const double rot[9]) {
         f.xyz(r) = Real(xyz[r]);
         for (int c = 0; c < 3; ++c) f.rot(r, c) = Real(rot[3 * r + c]);
     }
+    f.rotates = f.rot != Mat3::Identity();
+    f.moves = f.xyz != Vec3::Zero();
     return f;
 }
 
@@ -48,6 +56,14 @@ struct Frame {
 
 // Moves to a child frame rigidly attached at xyz (rot: child -> this).
 void apply_fixed(Frame &f, const Fixed &t) {
+    if (!t.rotates) {
+        if (t.moves) {
+            const Vec3 a = f.accel + f.alpha.cross(t.xyz) + f.omega.cross(f.omega.cross(t.xyz));
+            f.accel = a;
+            f.pos += f.rot * t.xyz;
+        }
+        return;
+    }
     Vec3 a = f.accel + f.alpha.cross(t.xyz) + f.omega.cross(f.omega.cross(t.xyz));
     f.pos += f.rot * t.xyz;
     f.rot = f.rot * t.rot;
