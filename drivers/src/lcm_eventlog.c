@@ -14,6 +14,12 @@ struct loadid_eventlog {
     FILE *f;
     int64_t start;            /* f's position at open: where the log begins */
     int64_t pos;              /* f's position as far as this reader knows */
+    /* The last read when it was of 4 bytes or fewer (the next event's sync
+     * word, read to check an event's length), while f is still just past
+     * it: reading the next header from there needs no seek back. */
+    int64_t held_off;
+    int held_len;
+    uint8_t held[4];
     int64_t next;             /* where the next event should begin */
     size_t data_max;
     int error;                /* sticky: LOADID_EVENTLOG_E_NOT_LOG or -EIO */
@@ -52,16 +58,33 @@ static int64_t be64(const uint8_t *b) {
 }
 
 /* Reads up to n bytes at off; returns how many (fewer at the end of the
- * file), or -1 on a read or seek error. */
+ * file), or -1 on a read or seek error. Bytes still held from the last
+ * read are taken from there: a seek costs a system call (lseek) even
+ * within stdio's buffer, one per event, which was most of --offline's
+ * reading time. */
 static long read_at(loadid_eventlog_t *r, int64_t off, void *dst, size_t n) {
+    size_t done = 0;
     if (r->pos != off) {
-        if (fseeko(r->f, (off_t)off, SEEK_SET) != 0) return -1;
-        r->pos = off;
+        if (r->held_len > 0 && r->pos == r->held_off + r->held_len && off >= r->held_off &&
+            off < r->pos) {
+            done = (size_t)(r->pos - off) < n ? (size_t)(r->pos - off) : n;
+            memcpy(dst, r->held + (off - r->held_off), done);
+            if (done == n) return (long)n;
+        } else {
+            if (fseeko(r->f, (off_t)off, SEEK_SET) != 0) return -1;
+            r->pos = off;
+        }
     }
-    const size_t got = fread(dst, 1, n, r->f);
+    const size_t got = fread((uint8_t *)dst + done, 1, n - done, r->f);
     r->pos += (int64_t)got;
-    if (got < n && ferror(r->f)) return -1;
-    return (long)got;
+    if (got < n - done && ferror(r->f)) return -1;
+    r->held_len = 0;
+    if (done == 0 && got <= sizeof r->held) {
+        memcpy(r->held, dst, got);
+        r->held_off = off;
+        r->held_len = (int)got;
+    }
+    return (long)(done + got);
 }
 
 /* Classifies the bytes at off as an event header; on H_OK fills *h and
