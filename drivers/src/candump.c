@@ -3,7 +3,6 @@
  * parsing rather than sscanf: sscanf's %llu accepts signs, skips blanks and
  * overflows silently, and a time must reach microseconds exactly.
  */
-#define _POSIX_C_SOURCE 200809L /* getc_unlocked */
 
 #include "loadid/candump.h"
 
@@ -18,7 +17,7 @@
 struct loadid_candump_reader {
     FILE *fp;
     long line;
-    char buf[LOADID_CANDUMP_LINE_MAX + 1];
+    char buf[LOADID_CANDUMP_LINE_MAX + 3]; /* fgets's LINE_MAX + 1, and two '\n' after */
 };
 
 static bool is_blank(char c)
@@ -31,18 +30,17 @@ static bool is_digit(char c)
     return c >= '0' && c <= '9';
 }
 
+/* A hex digit's value plus 1, 0 for any other byte: a table, as the
+ * three ranges' comparisons were most of a frame's parsing. */
+static const unsigned char hex_plus_1[256] = {
+    ['0'] = 1, ['1'] = 2, ['2'] = 3, ['3'] = 4, ['4'] = 5, ['5'] = 6, ['6'] = 7, ['7'] = 8,
+    ['8'] = 9, ['9'] = 10, ['A'] = 11, ['B'] = 12, ['C'] = 13, ['D'] = 14, ['E'] = 15,
+    ['F'] = 16, ['a'] = 11, ['b'] = 12, ['c'] = 13, ['d'] = 14, ['e'] = 15, ['f'] = 16,
+};
+
 static int hex_value(char c)
 {
-    if (c >= '0' && c <= '9') {
-        return c - '0';
-    }
-    if (c >= 'A' && c <= 'F') {
-        return c - 'A' + 10;
-    }
-    if (c >= 'a' && c <= 'f') {
-        return c - 'a' + 10;
-    }
-    return -1;
+    return (int)hex_plus_1[(unsigned char)c] - 1;
 }
 
 /* An interface name: 1..15 printable characters other than blanks. */
@@ -313,30 +311,46 @@ long loadid_candump_reader_line(const loadid_candump_reader_t *r)
 
 /* Reads one line into r->buf (without its '\n'). Returns 1 for a line,
  * 0 at the end of the file, -EIO, or LOADID_CANDUMP_E_LONG_LINE (the rest
- * of the line is consumed). getc rather than fgets: a NUL byte must not
- * silently cut a line short; getc_unlocked, as a reader has one thread:
- * no lock taken per character. */
+ * of the line is consumed). fgets reads up to the '\n' (a memchr in
+ * stdio's buffer, where getc per character cost as much as parsing the
+ * line), but a NUL byte must not silently cut a line short: the buffer
+ * is filled with '\n' first, so fgets's own NUL is the one followed by
+ * two of them (after the line's data, only its last byte can be a '\n');
+ * any NUL before it was in the line. */
 static int read_line(loadid_candump_reader_t *r)
 {
-    size_t n = 0;
-    bool too_long = false, nul = false;
-    int c;
-    while ((c = getc_unlocked(r->fp)) != EOF && c != '\n') {
-        if (c == '\0') {
-            nul = true;
-        } else if (n < LOADID_CANDUMP_LINE_MAX - 1) { /* room for the '\n' */
-            r->buf[n++] = (char)c;
-        } else {
-            too_long = true;
+    bool too_long = false, nul = false, any = false, newline = false;
+    for (;;) {
+        memset(r->buf, '\n', sizeof r->buf);
+        if (!fgets(r->buf, LOADID_CANDUMP_LINE_MAX + 1, r->fp)) {
+            break; /* the end of the file (or an error) before any byte */
+        }
+        any = true;
+        size_t len = strlen(r->buf);
+        if (r->buf[len + 1] != '\n' || r->buf[len + 2] != '\n') {
+            nul = true; /* a NUL in the line: fgets's is the last NUL */
+            len = LOADID_CANDUMP_LINE_MAX;
+            while (r->buf[len] != '\0') {
+                --len;
+            }
+        }
+        newline = r->buf[len - 1] == '\n';
+        if (!too_long && !newline && len == LOADID_CANDUMP_LINE_MAX) {
+            too_long = true; /* more than LINE_MAX - 1 bytes before the '\n' */
+        }
+        if (!too_long && !nul) {
+            r->buf[len - newline] = '\0';
+        }
+        if (newline || len < LOADID_CANDUMP_LINE_MAX) {
+            break; /* the line's end, or the file's (a short read) */
         }
     }
-    if (c == EOF && ferror(r->fp)) {
+    if (!newline && ferror(r->fp)) {
         return -EIO;
     }
-    if (c == EOF && n == 0 && !too_long && !nul) {
+    if (!any) {
         return 0;
     }
-    r->buf[n] = '\0';
     ++r->line;
     return too_long || nul ? LOADID_CANDUMP_E_LONG_LINE : 1;
 }
