@@ -277,18 +277,22 @@ static int have(rd_t *r, size_t k) {
     }
     return 1;
 }
+/* Big-endian, read from a local pointer: the compiler makes it one load
+ * and a byte swap (through r->n it was a load and a store per byte). */
 static uint64_t get_u64(rd_t *r) {
     if (!have(r, 8)) return 0;
-    uint64_t v = 0;
-    for (int i = 0; i < 8; ++i) v = v << 8 | r->p[r->n++];
-    return v;
+    const uint8_t *b = r->p + r->n;
+    r->n += 8;
+    return (uint64_t)b[0] << 56 | (uint64_t)b[1] << 48 | (uint64_t)b[2] << 40 |
+           (uint64_t)b[3] << 32 | (uint64_t)b[4] << 24 | (uint64_t)b[5] << 16 |
+           (uint64_t)b[6] << 8 | (uint64_t)b[7];
 }
 static int64_t get_i64(rd_t *r) { return (int64_t)get_u64(r); }
 static int32_t get_i32(rd_t *r) {
     if (!have(r, 4)) return 0;
-    uint32_t v = 0;
-    for (int i = 0; i < 4; ++i) v = v << 8 | r->p[r->n++];
-    return (int32_t)v;
+    const uint8_t *b = r->p + r->n;
+    r->n += 4;
+    return (int32_t)((uint32_t)b[0] << 24 | (uint32_t)b[1] << 16 | (uint32_t)b[2] << 8 | b[3]);
 }
 static int8_t get_i8(rd_t *r) { return have(r, 1) ? (int8_t)r->p[r->n++] : 0; }
 static void get_f64s(rd_t *r, double *v, int k) {
