@@ -29,8 +29,11 @@
  * estimated samples / run time, a lower bound (the zeroing and rest before
  * START cost time too). Reported: the medians over the repetitions, the
  * time a 1.5 s estimation at 1 kHz takes at the pipeline's rate, and the
- * peak resident memory. Target: at least 100 000 samples per second here
- * (1.5 s of data in under 15 ms), under 20 MB.
+ * peak resident memory. Targets: at least 200 000 estimated samples per
+ * second in memory and 150 000 with --offline's parsing here (1.5 s of
+ * data in 7.5 ms), under 20 MB. This machine's speed swings from run to
+ * run: tools/bench_compare.sh runs this benchmark and an earlier
+ * commit's alternately in one run, for before/after ratios.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -266,9 +269,10 @@ int main(int argc, char **argv) {
     printf("  pipeline median           %.0f estimated samples/s (min %.0f, max %.0f)\n", med,
            mem[0], mem[reps - 1]);
     printf("  --offline median          %.0f estimated samples/s (files parsed too; %.2fx the "
-           "pipeline's time)\n", fmed, med / fmed);
-    printf("  1.5 s estimation at 1 kHz %.2f ms in the pipeline (target < 15 ms, >= 100000 "
-           "samples/s: %s)\n", 1500 / med * 1e3, med >= 100000 ? "met" : "NOT met");
+           "pipeline's time; target >= 150000: %s)\n", fmed, med / fmed,
+           fmed >= 150000 ? "met" : "NOT met");
+    printf("  1.5 s estimation at 1 kHz %.2f ms in the pipeline (target < 7.5 ms, >= 200000 "
+           "samples/s: %s)\n", 1500 / med * 1e3, med >= 200000 ? "met" : "NOT met");
     printf("  estimation window median  %.2f ms for %lld samples (%.1f s configured; "
            "%.0f samples/s)\n", win[reps / 2] * 1e3, (long long)win_used, window_cfg.duration_s,
            (double)win_used / win[reps / 2]);
