@@ -139,7 +139,10 @@ int loadid_jf_end_piece(loadid_jf_t *jf);
  * fewer than lag_steps after it and its piece goes on); LOADID_E_STALE
  * (that update is more than max_age_us before t_us, t_us is before
  * every kept update, or that update is one of the first settle after a
- * (re)start: loadid_jf_settle_steps). Any output may be NULL. */
+ * (re)start: loadid_jf_settle_steps). Any output may be NULL. The
+ * filter keeps the smoothed sums it made (the next call adds only the
+ * terms they lack): const as to the data, but not to be called on one
+ * filter from two threads at once. */
 int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, int64_t max_age_us,
                               loadid_real_t *q, loadid_real_t *qd, loadid_real_t *qdd);
 
