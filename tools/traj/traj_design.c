@@ -150,7 +150,14 @@ typedef struct {
     /* the best point within the limits seen while optimising */
     double best_kappa;
     double *best_x;
+    /* NLopt's progress: evaluations of the candidates done before this
+     * one, and of this one so far (a report every PROGRESS_EVALS). */
+    int opt_done, opt_evals, opt_total;
 } search_t;
+
+/* NLopt reports progress this often: a candidate's 2000 evaluations take
+ * seconds, which without it pass in silence. */
+#define PROGRESS_EVALS 100
 
 static void unpack(const search_t *S, const double *x, loadid_fourier_traj_t *tr) {
     *tr = S->base;
@@ -224,8 +231,15 @@ static double objective(search_t *S, const double *x, int *feasible) {
 
 static double nlopt_objective(unsigned nx, const double *x, double *grad, void *data) {
     (void)nx, (void)grad; /* COBYLA is derivative-free */
+    search_t *S = data;
     int feasible;
-    return log(objective(data, x, &feasible));
+    const double k = objective(S, x, &feasible);
+    /* (a candidate's last evaluation: reported at its end, below) */
+    if (S->s->progress && ++S->opt_evals % PROGRESS_EVALS == 0 &&
+        S->opt_evals < S->s->max_evals)
+        S->s->progress(S->s->progress_ctx, "optimise", S->opt_done + S->opt_evals, S->opt_total,
+                       S->best_kappa);
+    return log(k);
 }
 
 static double nlopt_constraint(unsigned nx, const double *x, double *grad, void *data) {
@@ -352,7 +366,9 @@ int loadid_traj_design(const loadid_traj_problem_t *p, const loadid_traj_search_
     /* Local refinement of each candidate under the limits (COBYLA: no
      * gradients, inequality constraints); the best point within the limits
      * seen in any evaluation wins. */
+    S.opt_total = ncand * s->max_evals;
     for (int c = 0; c < ncand && isfinite(best[c].kappa) && s->max_evals > 0; ++c) {
+        S.opt_done = c * s->max_evals, S.opt_evals = 0;
         nlopt_opt opt = nlopt_create(NLOPT_LN_COBYLA, (unsigned)S.nx);
         if (!opt) break;
         double *step = x; /* scratch */
@@ -367,7 +383,10 @@ int loadid_traj_design(const loadid_traj_problem_t *p, const loadid_traj_search_
         double f;
         nlopt_optimize(opt, best[c].x, &f); /* any outcome: best_x keeps the best */
         nlopt_destroy(opt);
-        if (s->progress) s->progress(s->progress_ctx, "optimise", c + 1, ncand, S.best_kappa);
+        /* A candidate that converged early counts as its whole budget. */
+        if (s->progress)
+            s->progress(s->progress_ctx, "optimise", (c + 1) * s->max_evals, S.opt_total,
+                        S.best_kappa);
     }
 
     /* The result must hold every limit itself (not shrunk) at 10 kHz. */

@@ -78,7 +78,9 @@ typedef struct {
     int max_evals;                /* NLopt evaluations per candidate */
     uint64_t seed;
     int optimise_home;            /* 0: keep tr->q0 as given; 1: optimise q0 too */
-    /* Progress (may be NULL): stage "monte-carlo" or "optimise", done/total. */
+    /* Progress (may be NULL): stage "monte-carlo" (candidates, every 100)
+     * or "optimise" (NLopt's evaluations over all candidates, every 100,
+     * and at each candidate's end: done = its whole budget), done/total. */
     void (*progress)(void *ctx, const char *stage, int done, int total, double best_kappa);
     void *progress_ctx;
 } loadid_traj_search_t;
