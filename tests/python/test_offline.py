@@ -593,7 +593,11 @@ def test_messages_say_what_went_wrong(recording, trajectory, tmp_path):
 
 TRACE_HEADER = ("t_s,method,valid,samples,mass,com_x,com_y,com_z,ixx,ixy,ixz,iyy,iyz,izz,"
                 + ",".join(f"phi{i}" for i in range(10)) + ","
-                + ",".join(f"phi_std{i}" for i in range(10)))
+                + ",".join(f"phi_std{i}" for i in range(10)) + ","
+                + ",".join(f"offset{i}" for i in range(6)) + ","
+                + "fx,fy,fz,tx,ty,tz,spec_x,spec_y,spec_z,omega_x,omega_y,omega_z,"
+                + "alpha_x,alpha_y,alpha_z,g_init_x,g_init_y,g_init_z,"
+                + "res_fx,res_fy,res_fz,res_tx,res_ty,res_tz")
 
 
 def read_trace(path):
@@ -667,6 +671,87 @@ def test_trace_has_every_estimate_every_n_samples(recording, tmp_path):
     offline(cfg, recording, "--trace", trace, "--publish-every", "25", "--result", tmp_path / "r")
     rows = read_trace(trace)
     assert [int(r["samples"]) for r in rows["RLS"][:-1]] == list(range(25, 1501, 25))
+
+
+def wrench_of(phi, spec, omega, alpha):
+    """The paper's eqs. (1)-(2), written out for rows of motion (n x 3):
+    f = m a + alpha x (m c) + omega x (omega x (m c)),
+    tau = I alpha + omega x (I omega) + (m c) x a, I about the origin of S."""
+    m, mc = phi[0], np.asarray(phi[1:4])
+    i = phi[4:10]
+    inertia = np.array([[i[0], i[1], i[2]], [i[1], i[3], i[4]], [i[2], i[4], i[5]]])
+    f = m * spec + np.cross(alpha, mc) + np.cross(omega, np.cross(omega, mc))
+    tau = np.einsum("ij,nj->ni", inertia, alpha) \
+        + np.cross(omega, np.einsum("ij,nj->ni", inertia, omega)) + np.cross(mc, spec)
+    return np.hstack([f, tau])
+
+
+WRENCH = ["fx", "fy", "fz", "tx", "ty", "tz"]
+RESIDUAL = [f"res_{k}" for k in WRENCH]
+
+
+def trace_columns(rows, names):
+    return np.array([[r[n] for n in names] for r in rows])
+
+
+@pytest.mark.parametrize("offset_model", ["zeroing", "estimate"])
+def test_trace_residual_is_the_sample_less_the_estimate(recording, tmp_path, offset_model):
+    """The trace's newest-sample columns and its residual wrench: on every
+    valid row, res = the row's wrench - eqs. (1)-(2) of the row's phi at
+    a - g + g_init, omega, alpha - the row's offset (numpy, not the core's
+    regressor); g_init is the zeroing's gravity (|g| = 9.81, 0 with the
+    offset model); and the rows' wrench less the true load's, which only the
+    noise and the joint signals' errors should leave, is at the noise level
+    truth.yaml gives."""
+    cfg = write_config(tmp_path / "c.yaml",
+                       f"estimation:\n  methods: [RTLS, RLS, REFINED]\n"
+                       f"  offset_model: {offset_model}\n")
+    trace = tmp_path / "trace.csv"
+    offline(cfg, recording, "--trace", trace)
+    rows = read_trace(trace)
+    truth = read_truth(recording)
+    noise = np.array([float(truth["noise.force"])] * 3 + [float(truth["noise.torque"])] * 3)
+    true_phi = np.array(json.loads(truth["load.phi"]))
+    true_offset = np.array(json.loads(truth["offset"]))
+    zeroing = offset_model == "zeroing"
+    for m, rs in rows.items():
+        assert all(not math.isnan(r["fx"]) for r in rs), m      # every row has its sample
+        valid = [r for r in rs if r["valid"] == 1]
+        assert len(valid) > (0 if m == "REFINED" else 100), m
+        g = trace_columns(rs, ["g_init_x", "g_init_y", "g_init_z"])
+        if zeroing:
+            assert np.all(g == g[0]) and abs(np.linalg.norm(g[0]) - 9.81) < 0.01, g[0]
+        else:
+            assert np.all(g == 0)
+        spec = trace_columns(valid, ["spec_x", "spec_y", "spec_z"]) + \
+            trace_columns(valid, ["g_init_x", "g_init_y", "g_init_z"])
+        omega = trace_columns(valid, ["omega_x", "omega_y", "omega_z"])
+        alpha = trace_columns(valid, ["alpha_x", "alpha_y", "alpha_z"])
+        w = trace_columns(valid, WRENCH)
+        want = np.vstack([w[k] - wrench_of(np.array([r[f"phi{i}"] for i in range(10)]),
+                                            spec[k:k + 1], omega[k:k + 1], alpha[k:k + 1])[0]
+                          - np.array([r[f"offset{i}"] for i in range(6)])
+                          for k, r in enumerate(valid)])
+        # %.9g of numbers up to some 20 N and 2 N m
+        np.testing.assert_allclose(trace_columns(valid, RESIDUAL), want, rtol=0,
+                                   atol=1e-6, err_msg=m)
+        if not zeroing:
+            assert np.allclose([r["offset0"] for r in valid[-5:]], true_offset[0], atol=0.3)
+        # Invalid rows: the sample is there, the residual is not.
+        for r in rs:
+            if r["valid"] == 0:
+                assert math.isnan(r["res_fx"]) and not math.isnan(r["fx"])
+    # The samples themselves: the wrench less the true load's (and the true
+    # offset, with the offset model) is the noise, about its level.
+    rs = [r for r in rows["RTLS"][:-1]]
+    spec = trace_columns(rs, ["spec_x", "spec_y", "spec_z"]) + \
+        trace_columns(rs, ["g_init_x", "g_init_y", "g_init_z"])
+    left = trace_columns(rs, WRENCH) - wrench_of(
+        true_phi, spec, trace_columns(rs, ["omega_x", "omega_y", "omega_z"]),
+        trace_columns(rs, ["alpha_x", "alpha_y", "alpha_z"])) - (0 if zeroing else true_offset)
+    rms = np.sqrt(np.mean(left ** 2, axis=0))
+    print(offset_model, "the wrench less the true load's, RMS:", rms, "noise:", noise)
+    assert np.all(rms > 0.5 * noise) and np.all(rms < 4 * noise), (rms, noise)
 
 
 def test_trace_that_cannot_be_written_fails_in_one_line(recording, tmp_path):

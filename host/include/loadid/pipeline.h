@@ -85,6 +85,22 @@ typedef struct {
     double snr[3];                /* mass, m c, inertia: how far each stands out
                                      of the noise (loadid_est_signal_to_noise) */
     double model_mass, model_com[3], model_inertia_com[6];
+    /* After loadid_pipeline_trace_rows, in every estimate published while
+     * ESTIMATING and in the final ones: the window's newest sample so far
+     * (the trace's columns, trace_csv.h). */
+    int has_row;                  /* 1 when the fields below are set */
+    double row_wrench[6];         /* its wrench as the estimators take it, less
+                                     the distal part's: measured minus the
+                                     zeroing average (eq. 7) when zeroing,
+                                     minus A phi_distal [N, N m] */
+    double row_motion[9];         /* the signal source's a - g [m/s^2], omega
+                                     [rad/s], alpha [rad/s^2] of its regressor */
+    double row_g_init[3];         /* gravity in S at zeroing (the zeroing term of
+                                     eqs. 7-9: A is eq. (6) at a - g + g_init);
+                                     0 with the offset model */
+    double residual[6];           /* row_wrench - A phi - offset: what this
+                                     estimate leaves unexplained [N, N m];
+                                     NaN when !valid */
 } loadid_pipeline_estimate_t;
 
 /* One force-torque sample, whichever sensor it came from (the JR3's four
@@ -165,6 +181,14 @@ void loadid_pipeline_destroy(loadid_pipeline_t *p);
  * not only the final one: loadidd --offline --trace, for the error band
  * of an estimate's evolution. Off by default. */
 void loadid_pipeline_std_always(loadid_pipeline_t *p, int on);
+
+/* Every published estimate carries the window's newest sample (its wrench,
+ * motion and zeroing gravity) and the residual wrench the estimate leaves
+ * on it (has_row, row_*, residual): the trace's residual. The loop keeps
+ * one sample's row (15 numbers) per sample; each publication computes the
+ * sample's regressor once and a 6 x 16 product per method. Allocates
+ * nothing. Off by default. */
+void loadid_pipeline_trace_rows(loadid_pipeline_t *p, int on);
 
 /* Inputs, in time order. */
 void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_joints,

@@ -69,7 +69,8 @@ static void usage(FILE *out) {
             "(\"complete\": false) unless --allow-incomplete; --trace writes every method's\n"
             "estimate every N-th sample (--publish-every, default 10) and the final ones as\n"
             "CSV (t_s since START, method, valid, samples, mass, com, inertia about the COM,\n"
-            "phi). Without --offline it runs live:\n"
+            "phi, phi_std, offset, the newest sample's wrench and motion, and the residual\n"
+            "wrench the estimate leaves on it). Without --offline it runs live:\n"
             "LCM in and out, JR3 frames from SocketCAN or a candump log (--can-file),\n"
             "or a Modbus F/T sensor (sensor.type modbus). --publish-every overrides\n"
             "estimation.publish_every. --replay runs live on a recording instead, without\n"
@@ -174,8 +175,12 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
     loadid_pipeline_t *p = NULL;
     int rc = loadid_pipeline_create(cfg, chain, &sink, trace_path ? publish_every : 0, &p, err,
                                     sizeof err);
-    /* The trace shows each estimate with its standard deviations. */
-    if (rc == 0 && trace_path) loadid_pipeline_std_always(p, 1);
+    /* The trace shows each estimate with its standard deviations and the
+     * residual wrench it leaves on the newest sample. */
+    if (rc == 0 && trace_path) {
+        loadid_pipeline_std_always(p, 1);
+        loadid_pipeline_trace_rows(p, 1);
+    }
     if (rc == 0) rc = loadid_offline_run(p, dir, &rep, err, sizeof err);
     if (rc != 0) {
         fprintf(stderr, "%s: %s\n", prog, err);

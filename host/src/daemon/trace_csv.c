@@ -19,6 +19,10 @@ int loadid_trace_csv_open(loadid_trace_csv_t *t, const char *path, char *err, si
     fputs("t_s,method,valid,samples,mass,com_x,com_y,com_z,ixx,ixy,ixz,iyy,iyz,izz", t->out);
     for (int i = 0; i < 10; ++i) fprintf(t->out, ",phi%d", i);
     for (int i = 0; i < 10; ++i) fprintf(t->out, ",phi_std%d", i);
+    for (int i = 0; i < 6; ++i) fprintf(t->out, ",offset%d", i);
+    fputs(",fx,fy,fz,tx,ty,tz,spec_x,spec_y,spec_z,omega_x,omega_y,omega_z,alpha_x,alpha_y,alpha_z"
+          ",g_init_x,g_init_y,g_init_z,res_fx,res_fy,res_fz,res_tx,res_ty,res_tz",
+          t->out);
     fputc('\n', t->out);
     return 0;
 }
@@ -38,6 +42,15 @@ void loadid_trace_csv_row(loadid_trace_csv_t *t, const loadid_pipeline_estimate_
     fprintf(t->out, "%.9g,%s,%d,%lld", t_s, loadid_method_name((loadid_method_t)e->method),
             e->valid ? 1 : 0, (long long)e->samples);
     for (int i = 0; i < 30; ++i) fprintf(t->out, ",%.9g", e->valid ? v[i] : NAN);
+    for (int i = 0; i < 6; ++i) fprintf(t->out, ",%.9g", e->valid ? e->offset[i] : NAN);
+    /* The newest sample's row (loadid_pipeline_trace_rows) and the
+     * residual this estimate leaves on it (NaN when !valid). */
+    double r[6 + 9 + 3 + 6];
+    memcpy(r, e->row_wrench, sizeof e->row_wrench);
+    memcpy(r + 6, e->row_motion, sizeof e->row_motion);
+    memcpy(r + 15, e->row_g_init, sizeof e->row_g_init);
+    memcpy(r + 18, e->residual, sizeof e->residual);
+    for (int i = 0; i < 24; ++i) fprintf(t->out, ",%.9g", e->has_row ? r[i] : NAN);
     if (fputc('\n', t->out) == EOF && !t->errnum) t->errnum = errno ? errno : EIO;
 }
 

@@ -85,6 +85,10 @@ struct loadid_pipeline {
     loadid_pipeline_estimate_t latest[LOADID_MAX_METHODS];
     int primary;                  /* method used for wrench_t, -1 none */
     loadid_real_t phi_total[16];  /* primary's estimate with the distal part */
+    /* loadid_pipeline_trace_rows: the window's newest sample */
+    int trace_rows, have_row;
+    loadid_real_t row_y[6];           /* as the estimators took it (eq. 7) */
+    loadid_regressor_input_t row_motion;
 
     int64_t frames_bad_extra, samples_used, estimator_errors;
     /* loadid_pipeline_sample (samples decoded outside, the Modbus sensor's) */
@@ -215,6 +219,10 @@ void loadid_pipeline_std_always(loadid_pipeline_t *p, int on) {
     if (p) p->std_always = on != 0;
 }
 
+void loadid_pipeline_trace_rows(loadid_pipeline_t *p, int on) {
+    if (p) p->trace_rows = on != 0;
+}
+
 void loadid_pipeline_destroy(loadid_pipeline_t *p) {
     if (!p) return;
     for (int m = 0; m < LOADID_MAX_METHODS; ++m) loadid_est_destroy(p->est[m]);
@@ -333,8 +341,39 @@ static void estimate_at(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t 
     }
 }
 
+static int data_matrix(const loadid_pipeline_t *p, const loadid_regressor_input_t *in,
+                       loadid_real_t A[6 * 16]);
+
+/* The window's newest sample and what e leaves unexplained on it, the
+ * residual wrench y - A phi_total (loadid_pipeline_trace_rows). */
+static void fill_row(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *e) {
+    loadid_real_t A[6 * 16], distal[16] = {0}, total[16] = {0}, pd[6], pt[6];
+    if (!p->trace_rows || !p->have_row || data_matrix(p, &p->row_motion, A) != 0) return;
+    for (int i = 0; i < 10; ++i) distal[i] = p->distal[i];
+    loadid_regressor_apply(A, p->n_params, distal, pd);
+    const int zeroing = p->n_params == LOADID_NPHI;
+    e->has_row = 1;
+    for (int i = 0; i < 3; ++i) {
+        e->row_motion[i] = (double)p->row_motion.spec[i];
+        e->row_motion[3 + i] = (double)p->row_motion.omega[i];
+        e->row_motion[6 + i] = (double)p->row_motion.alpha[i];
+        e->row_g_init[i] = zeroing ? (double)p->g_init[i] : 0.0;
+    }
+    for (int i = 0; i < 6; ++i) e->row_wrench[i] = (double)(p->row_y[i] - pd[i]);
+    if (!e->valid) {
+        for (int i = 0; i < 6; ++i) e->residual[i] = NAN;
+        return;
+    }
+    for (int i = 0; i < 10; ++i) total[i] = (loadid_real_t)e->phi[i] + p->distal[i];
+    if (!zeroing)
+        for (int i = 0; i < 6; ++i) total[10 + i] = (loadid_real_t)e->offset[i];
+    loadid_regressor_apply(A, p->n_params, total, pt);
+    for (int i = 0; i < 6; ++i) e->residual[i] = (double)(p->row_y[i] - pt[i]);
+}
+
 static void estimate_of(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t *e, int final) {
     estimate_at(p, m, e, final, p->last_sample_us, p->state);
+    fill_row(p, e);
 }
 
 /* REFINED's estimate as its job made it, stamped now. */
@@ -343,6 +382,7 @@ static void take_refined(loadid_pipeline_t *p) {
     *e = p->job_est;
     e->utime = p->last_sample_us;
     e->state = p->state;
+    fill_row(p, e);
 }
 
 static void publish_all(loadid_pipeline_t *p, int final) {
@@ -607,6 +647,7 @@ static void reset_run(loadid_pipeline_t *p) {
     for (int m = 0; m < p->num_methods; ++m) loadid_est_reset(p->est[m]);
     p->samples_used = 0;
     p->since_publish = 0;
+    p->have_row = 0;
     p->primary = -1;
     p->refined_ran = 0;
     if (p->refined) loadid_refined_start(p->refined);
@@ -884,6 +925,11 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
         const int is_riv = p->cfg.methods[m] == LOADID_METHOD_RIV;
         if ((is_riv && !have_c) || m == p->refined_m) continue;
         if (loadid_est_update(p->est[m], A, is_riv ? C : NULL, y) != 0) p->estimator_errors++;
+    }
+    if (p->trace_rows) {
+        memcpy(p->row_y, y, sizeof p->row_y);
+        p->row_motion = motion;
+        p->have_row = 1;
     }
     p->samples_used++;
     p->last_sample_us = s->t_us;
