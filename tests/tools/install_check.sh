@@ -2,12 +2,15 @@
 # install_check.sh: cmake --install puts loadid in place (into a scratch
 # DESTDIR), and what it installed works: the programs run, the installed
 # configuration reads the installed robot, the unit starts the installed
-# loadidd, the lcm-spy launcher finds the installed jar, and a second
-# install keeps a site's own /etc/loadid/loadid.yaml.
-# Usage: install_check.sh BUILD_DIR JAR GOLDEN_DIR (JAR empty: built without
-# Java, so no lcm-spy launcher and jar are expected)
+# loadidd, the lcm-spy launcher finds the installed jar, the installed
+# `loadid plot` finds its script and draws, and a second install keeps a
+# site's own /etc/loadid/loadid.yaml.
+# Usage: install_check.sh BUILD_DIR JAR GOLDEN_DIR [PYTHON] (JAR empty: built
+# without Java, so no lcm-spy launcher and jar are expected; PYTHON: one with
+# numpy and matplotlib for loadid plot, the venv's; empty: the plot is not
+# drawn, which is said)
 set -eu
-build=$1 jar=$2 golden=$3
+build=$1 jar=$2 golden=$3 python=${4:-}
 root=$(mktemp -d)
 trap 'rm -rf "$root"' EXIT
 DESTDIR=$root cmake --install "$build" --prefix /usr/local >"$root.log" 2>&1 ||
@@ -38,10 +41,23 @@ gzip -dc "$golden/lcm.log.gz" >"$rec/lcm.log"
     --result "$root/result.json" || fail "the installed configuration does not estimate"
 grep -q '"method": "RTLS", "load_name": "o1", "samples": 1500' "$root/result.json" ||
     fail "no RTLS estimate of 1500 samples"
+# loadid plot as installed: its script in share/loadid, found beside the
+# program; the golden recording estimated by the installed loadidd and drawn.
+[ -f "$root/usr/local/share/loadid/loadid_plot.py" ] || fail "loadid plot's script is missing"
+if [ -n "$python" ]; then
+    LOADID_PYTHON=$python "$root/usr/local/bin/loadid" plot --config "$root/etc/loadid/loadid.yaml" \
+        "$rec" --out "$root/plots" >"$root/plot.log" 2>&1 || { cat "$root/plot.log"; fail "loadid plot"; }
+    for f in trace-estimates.png trace-residual.png trace-residual.csv result.json; do
+        [ -s "$root/plots/$f" ] || fail "loadid plot did not write $f"
+    done
+    plotted="; loadid plot drew the golden recording"
+else
+    plotted="; loadid plot not drawn (no Python given)"
+fi
 # A site's configuration survives the next install.
 echo "# the site's" >>"$root/etc/loadid/loadid.yaml"
 DESTDIR=$root cmake --install "$build" --prefix /usr/local >"$root.log" 2>&1 || fail "reinstall"
 grep -q "Kept: $root/etc/loadid/loadid.yaml" "$root.log" || fail "no 'Kept' line"
 rm -f "$root.log"
 tail -1 "$root/etc/loadid/loadid.yaml" | grep -qx "# the site's" || fail "the site's configuration was overwritten"
-echo "install_check: $(find "$root" -type f | wc -l) files installed; all in place and working"
+echo "install_check: $(find "$root" -type f | wc -l) files installed; all in place and working$plotted"

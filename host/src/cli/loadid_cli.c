@@ -15,6 +15,9 @@
  * no answer, a daemon that did not act on the command (STOP while idle,
  * START while estimating); both exit 1 with the reason, as does a start
  * that ends in FAILED.
+ *
+ * `loadid plot PATH` draws how an estimate came about (cli_plot.h); it
+ * needs no daemon.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -30,6 +33,7 @@
 #include "lcmtypes/loadid_command_t.h"
 #include "lcmtypes/loadid_estimate_t.h" /* the states status_t carries */
 #include "lcmtypes/loadid_status_t.h"
+#include "cli_plot.h"
 #include "loadid/config.h"
 #include "loadid/lcm_wire.h" /* the states' names */
 
@@ -45,6 +49,7 @@ static void usage(FILE *out) {
             "usage: %s [--config FILE | --lcm-url URL] [--timeout SECONDS] zero|start|stop|reset\n"
             "              [--load-name NAME]\n"
             "       %s [--config FILE | --lcm-url URL] [--timeout SECONDS] status\n"
+            "       %s plot [--config FILE] [--out DIR] [--publish-every N] RECORDING|TRACE|DIR\n"
             "Commands loadidd over LCM: zero (average the wrench in the still pose), start\n"
             "(estimate for estimation.duration_s), stop, reset. Each waits until loadidd's\n"
             "status_t shows the command's effect (zero: ZEROING, start: ESTIMATING,\n"
@@ -52,8 +57,14 @@ static void usage(FILE *out) {
             "no status_t comes within --timeout (default 3 s: no daemon on this lcm.url\n"
             "and lcm.channel_prefix) or none shows the effect (the daemon did not act on\n"
             "it). status waits for the next status_t (once a second) and prints it; exit 1\n"
-            "when none comes in time. Exit 2 for a usage error.\n",
-            prog, prog);
+            "when none comes in time. Exit 2 for a usage error.\n"
+            "plot draws PNG figures of how an estimate came about: every method's estimate\n"
+            "over the window and the residual wrench (measured minus A(t) phi_hat). A\n"
+            "RECORDING (can.log, lcm.log) is estimated first by loadidd --offline --trace\n"
+            "with --config FILE (into --out DIR, default RECORDING/plots); a TRACE CSV of\n"
+            "loadidd --trace, or a DIR holding some (and loadid-demo's runs.csv), is drawn\n"
+            "as it is (into --out DIR, default beside it). It prints the residual's RMS.\n",
+            prog, prog, prog);
 }
 
 static double mono_s(void) {
@@ -135,16 +146,29 @@ static const char *no_effect_hint(int action, int state) {
 }
 
 int main(int argc, char **argv) {
-    const char *config_path = NULL, *url = NULL, *load_name = "";
+    const char *config_path = NULL, *url = NULL, *load_name = "", *out = NULL;
     double timeout = 3;
+    int publish_every = 0;
     static const struct option opts[] = {
         {"config", required_argument, NULL, 'c'}, {"lcm-url", required_argument, NULL, 'u'},
         {"load-name", required_argument, NULL, 'n'}, {"timeout", required_argument, NULL, 't'},
+        {"out", required_argument, NULL, 'o'}, {"publish-every", required_argument, NULL, 'p'},
         {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0}};
     int c;
     while ((c = getopt_long(argc, argv, "c:u:n:t:h", opts, NULL)) != -1) {
         switch (c) {
             case 'c': config_path = optarg; break;
+            case 'o': out = optarg; break;
+            case 'p': {
+                char *end;
+                const long v = strtol(optarg, &end, 10);
+                if (*end || end == optarg || v < 1 || v > 1000000) {
+                    fprintf(stderr, "%s: --publish-every: a count >= 1, not %s\n", prog, optarg);
+                    return 2;
+                }
+                publish_every = (int)v;
+                break;
+            }
             case 'u': url = optarg; break;
             case 'n': load_name = optarg; break;
             case 't': {
@@ -161,8 +185,20 @@ int main(int argc, char **argv) {
             default: usage(stderr); return 2;
         }
     }
+    if (optind < argc && strcmp(argv[optind], "plot") == 0) {
+        if (optind + 2 != argc) {
+            fprintf(stderr, "%s: plot needs one RECORDING, TRACE or DIR\n", prog);
+            usage(stderr);
+            return 2;
+        }
+        return loadid_cli_plot(prog, config_path, argv[optind + 1], out, publish_every);
+    }
     if (optind + 1 != argc) {
         usage(stderr);
+        return 2;
+    }
+    if (out || publish_every) {
+        fprintf(stderr, "%s: --out and --publish-every are for plot\n", prog);
         return 2;
     }
     const char *verb = argv[optind];
@@ -172,7 +208,8 @@ int main(int argc, char **argv) {
     for (int i = ZERO; i <= RESET; ++i)
         if (strcmp(verb, verbs[i]) == 0) action = i;
     if (!action && strcmp(verb, "status") != 0) {
-        fprintf(stderr, "%s: unknown command '%s' (zero, start, stop, reset, status)\n", prog, verb);
+        fprintf(stderr, "%s: unknown command '%s' (zero, start, stop, reset, status, plot)\n", prog,
+                verb);
         return 2;
     }
     static loadid_config_t cfg;
