@@ -4,13 +4,16 @@
 # On a fresh Debian 12 (bookworm), as root (or a user with sudo), from any
 # directory:
 #   bash tools/setup.sh deps        Debian packages + Python venv (build/venv)
-#   bash tools/setup.sh demo [ARGS] deps, release build, run loadid-demo ARGS
+#   bash tools/setup.sh demo [ARGS] the build's packages, the plots' Python
+#                                   packages, release build, run loadid-demo
+#                                   --out build/demo ARGS
 #   bash tools/setup.sh test        deps, release + asan + fuzz builds, all ctest
 #                                   tests (the 30 s fuzzing runs when CI=true)
 #   bash tools/setup.sh bench       deps, release build, run the benchmarks
 #
 # System packages come only from Debian (apt-get), Python packages only from
-# PyPI, pinned in tools/requirements.txt, installed into build/venv. Nothing
+# PyPI, pinned in tools/requirements.txt (the demo: only those of
+# tools/requirements-demo.txt), installed into build/venv. Nothing
 # else is downloaded. Every step is idempotent: a second run installs nothing
 # and only rebuilds what changed. Each step prints one line; apt's, pip's
 # and the builds' output goes to build/logs/ (its tail is shown on failure).
@@ -71,6 +74,10 @@ cd "$ROOT"
 VENV=build/venv
 REQUIREMENTS=tools/requirements.txt
 STAMP="$VENV/.requirements.sha256"
+# The demo's plots need only numpy and matplotlib: a subset of the above.
+DEMO_REQUIREMENTS=tools/requirements-demo.txt
+DEMO_STAMP="$VENV/.requirements-demo.sha256"
+DEMO_OUT=build/demo
 
 usage() {
   cat <<'EOF'
@@ -80,8 +87,11 @@ commands:
   deps         install missing Debian packages (apt-get; the build's and the
                tests') and the Python virtual environment build/venv
                (pinned, tools/requirements.txt)
-  demo [ARGS]  the build's packages only (not the tests' qemu, JDK, clang),
-               build the release preset, run loadid-demo with ARGS
+  demo [ARGS]  the build's packages only (not the tests' qemu, JDK, clang)
+               and the plots' Python packages (tools/requirements-demo.txt),
+               build the release preset, run loadid-demo --out build/demo
+               with ARGS (its table, verdicts and timing; its plots in
+               build/demo)
   test         deps, build the release, asan and fuzz presets, run every ctest
                test; each fuzz target fuzzes 30 s only when CI=true or
                LOADID_FUZZ_TIME=1 (else its seeds are replayed)
@@ -144,7 +154,20 @@ install_debian_packages() {
 
 # --- Python virtual environment ----------------------------------------------
 
+# make_venv [demo]: build/venv with tools/requirements.txt, or (demo) with
+# only tools/requirements-demo.txt's packages (which the full set holds).
 make_venv() {
+  local req=$REQUIREMENTS stamp=$STAMP
+  if [[ "${1:-}" == demo ]]; then
+    req=$DEMO_REQUIREMENTS stamp=$DEMO_STAMP
+  fi
+  # The demo's pins are the full set's: one version of each package.
+  local pin
+  while read -r pin; do
+    [[ -z "$pin" || "$pin" == \#* ]] && continue
+    grep -qxF "$pin" "$REQUIREMENTS" \
+      || die "$DEMO_REQUIREMENTS: $pin is not in $REQUIREMENTS (keep the two in step)"
+  done <"$DEMO_REQUIREMENTS"
   # Recreate the venv if it is broken or was made by another Python.
   if [[ -x "$VENV/bin/python" && -f "$VENV/pyvenv.cfg" ]] \
     && grep -qx 'home = /usr/bin' "$VENV/pyvenv.cfg" \
@@ -157,14 +180,19 @@ make_venv() {
     "$DEBIAN_PYTHON" -m venv "$VENV"
   fi
 
-  local want
-  want="$(sha256sum "$REQUIREMENTS" | cut -d' ' -f1)"
-  if [[ -f "$STAMP" && "$(cat "$STAMP")" == "$want" ]]; then
-    say "Python packages: up to date ($REQUIREMENTS)"
+  local want full
+  want="$(sha256sum "$req" | cut -d' ' -f1)"
+  full="$(sha256sum "$REQUIREMENTS" | cut -d' ' -f1)"
+  if [[ -f "$stamp" && "$(cat "$stamp")" == "$want" ]]; then
+    say "Python packages: up to date ($req)"
     return
   fi
-  say "installing Python packages from PyPI ($REQUIREMENTS; log: $LOGS/pip.log)"
-  rm -f "$STAMP"
+  if [[ "$req" != "$REQUIREMENTS" && -f "$STAMP" && "$(cat "$STAMP")" == "$full" ]]; then
+    say "Python packages: up to date ($REQUIREMENTS, which holds $req)"
+    return
+  fi
+  say "installing Python packages from PyPI ($req; log: $LOGS/pip.log)"
+  rm -f "$stamp"
   # --isolated: ignore pip's configuration files and PIP_* variables (such as
   # PIP_FIND_LINKS or PIP_EXTRA_INDEX_URL), so PyPI is the only source.
   # --only-binary: the pins all have wheels; never compile one from source.
@@ -175,17 +203,19 @@ make_venv() {
   fi
   quietly pip "$VENV/bin/python" -m pip install --isolated --no-input \
     --disable-pip-version-check --index-url "$PYPI_INDEX" --only-binary=:all: --timeout 60 \
-    "${cert[@]}" -r "$REQUIREMENTS" || exit 1
+    "${cert[@]}" -r "$req" || exit 1
   quietly pip-check "$VENV/bin/python" -m pip check --isolated --disable-pip-version-check \
     || exit 1
-  printf '%s\n' "$want" >"$STAMP"
+  printf '%s\n' "$want" >"$stamp"
 }
 
-deps() { # deps [test]: the build's packages, and with `test` the tests' too
+# deps [test|demo]: the build's packages, and with `test` the tests' too;
+# the Python packages, with `demo` only the plots'.
+deps() {
   DEBIAN_PACKAGES=("${BUILD_PACKAGES[@]}")
   [[ "${1:-}" == test ]] && DEBIAN_PACKAGES+=("${TEST_PACKAGES[@]}")
   install_debian_packages
-  make_venv
+  if [[ "${1:-}" == demo ]]; then make_venv demo; else make_venv; fi
 }
 
 # --- builds ------------------------------------------------------------------
@@ -267,10 +297,10 @@ main() {
       deps test
       ;;
     demo)
-      deps
+      deps demo
       build release
-      say "running build/release/tools/loadid-demo${*:+ $*}"
-      exec build/release/tools/loadid-demo "$@"
+      say "running build/release/tools/loadid-demo --out $DEMO_OUT${*:+ $*}"
+      exec build/release/tools/loadid-demo --out "$DEMO_OUT" "$@"
       ;;
     test)
       (($# == 0)) || { usage >&2; exit 2; }

@@ -239,8 +239,8 @@ def plot_residual(plt, np, res, title, path):
         ax.set_xlabel("t after START [s]")
     fig.suptitle(f"{title}: the residual wrench, measured minus A(t) phi_hat of the estimate at "
                  "that moment, on each row's newest sample\n(grey: no estimate yet; the y range "
-                 "is the last two thirds'; the legend: the RMS over every traced sample with the "
-                 "final estimate)", fontsize=11)
+                 "fits the last two thirds of the window; in the legend the RMS over every traced "
+                 "sample with the final estimate)", fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
