@@ -12,7 +12,8 @@
  *     its end.
  * The pipeline's outputs go out on LCM as they come (lcm_out.c): estimate_t
  * on LOADID_ESTIMATE, wrench_t on LOADID_WRENCH, and at DONE load_model_t
- * on LOADID_MODEL with the estimate saved (results.c). status_t also goes
+ * on LOADID_MODEL with the estimate handed to the save worker (results.c,
+ * save_worker.h), which writes it on a thread of its own. status_t also goes
  * out at every state change, once the event that made it is handled, with
  * the change's time as its utime: a command's change carries the command's
  * own utime, which is how the CLI knows the acknowledgement of its
@@ -23,7 +24,10 @@
  * (tests/python/test_live_no_alloc.py proves it under an
  * allocation-counting LD_PRELOAD): messages are encoded and decoded by
  * drivers/lcm_wire.h on static buffers, LCM on udpm:// goes through the
- * daemon's own sockets, and a finished estimate is saved without stdio.
+ * daemon's own sockets, and a finished estimate is saved by a thread of
+ * its own (save_worker.h): after start-up the loop makes no file-system
+ * call but --can-file's and --replay's reads
+ * (tests/python/test_systemd_unit.py traces it).
  */
 #define _GNU_SOURCE
 #include "live.h"
@@ -67,6 +71,7 @@ typedef struct {
     loadid_loop_times_t times;
     int ticks;
     int done_pending;             /* DONE reached: save the estimate */
+    loadid_save_worker_t *saver;  /* results.directory set, else NULL */
     struct {
         int64_t utime;
         int8_t state;
@@ -123,15 +128,15 @@ static void publish_status(live_t *L, int periodic, int state, int64_t utime) {
     publish(L, CH_STATUS, loadid_lcm_encode_status(&m, tx_buf, sizeof tx_buf));
 }
 
-/* DONE: the best load model out on LOADID_MODEL, and the estimate into
- * results.directory (when configured). */
+/* DONE: the best load model out on LOADID_MODEL, and the estimate handed
+ * to the save worker (when results.directory is configured). */
 static void save_done(live_t *L) {
     L->done_pending = 0;
     loadid_pipeline_estimate_t e;
     loadid_pipeline_compensation_t c;
     if (loadid_pipeline_final(L->pipe, &e, &c) != 0) return;
     if (e.has_model) publish(L, CH_MODEL, loadid_lcm_out_load_model(&e, tx_buf, sizeof tx_buf));
-    loadid_results_save(L->cfg, &e, &c);
+    loadid_results_save(L->cfg, L->saver, &e, &c);
 }
 
 /* ---------------------------------------------------------------- loop */
@@ -250,6 +255,9 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
             rc = 1;
         }
     }
+    /* The save worker likewise (save_worker.h: the disk's waits off the
+     * loop), before the Modbus poller (the input) and the real-time set-up. */
+    if (rc == 0) rc = loadid_results_start(cfg, &L.saver);
     if (rc == 0) rc = open_input(&L);
     if (rc == 0) sync_input_fd(&L, ep);
     if (rc == 0 && loadid_realtime_setup(cfg, err, sizeof err) != 0) {
@@ -297,6 +305,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         L.num_changes = 0;
         /* The model and the saved result wait for REFINED, which may be the best. */
         if (L.done_pending && !loadid_pipeline_refined_pending(L.pipe)) save_done(&L);
+        loadid_results_log(L.saver);
         if (stop) break;
     }
     loadid_notify_stopping();
@@ -310,6 +319,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         loadid_input_summary(&L.input);
     }
     publish_status(&L, 1, 0, 0);
+    loadid_results_stop(L.saver); /* the saves submitted end, and are logged */
     loadid_input_close(&L.input);
     if (ep >= 0) close(ep);
     if (tick_fd >= 0) close(tick_fd);
