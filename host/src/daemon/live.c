@@ -7,7 +7,8 @@
  *     candump log, the Modbus poller or a replayed recording);
  *   - a 10 ms timerfd that ends zeroing and estimation windows on time and
  *     publishes status_t once a second (status.c);
- *   - a signalfd for SIGTERM and SIGINT (a clean stop);
+ *   - a signalfd for SIGTERM and SIGINT (a clean stop, after a REFINED
+ *     run still going: finish_refined);
  *   - REFINED's worker thread (the pipeline's worker.h), when configured:
  *     its end.
  * The pipeline's outputs go out on LCM as they come (lcm_out.c): estimate_t
@@ -33,6 +34,7 @@
 #include "live.h"
 
 #include <errno.h>
+#include <poll.h>
 #include <signal.h>
 #include <stdint.h>
 #include <string.h>
@@ -68,6 +70,7 @@ typedef struct {
     loadid_lcm_inputs_t lcm_in;
     loadid_input_t input;
     int input_fd;                 /* the input's descriptor in the epoll set, or -1 */
+    int refined_fd;               /* REFINED's worker's end (worker.h), or -1 */
     loadid_loop_times_t times;
     int ticks;
     int done_pending;             /* DONE reached: save the estimate */
@@ -139,6 +142,41 @@ static void save_done(live_t *L) {
     loadid_results_save(L->cfg, L->saver, &e, &c);
 }
 
+/* At the stop, a REFINED run still on its worker (SIGTERM soon after DONE:
+ * the estimate the model and the saved result wait for, often the best)
+ * is waited for, then published and saved as the loop would have done.
+ *
+ * At most 2 s. The run is a batch over the window: about 14 ms on the
+ * robot's PC, some hundred ms under ASan on a loaded machine; one not
+ * ended after 2 s (over a hundred times its usual time) is starved or
+ * stuck, and the stop must not wait on it: systemd's watchdog is off
+ * while a unit stops, so nothing but TimeoutStopSec (90 s by default,
+ * then SIGKILL) would end the wait, and a restart waits for the stop.
+ * 2 s is also what the unit's WatchdogSec allows a running daemon to be
+ * silent. Returns 0, or 1 when the run is still going: its memory (the
+ * pipeline's, which it alone uses: copies of the configuration and the
+ * chain) is then left to the exit, not freed under it. poll, and what the
+ * loop does at REFINED's end: nothing allocated. */
+enum { REFINED_STOP_WAIT_MS = 2000 };
+
+static int finish_refined(live_t *L) {
+    if (L->refined_fd < 0 || !loadid_pipeline_refined_pending(L->pipe)) return 0;
+    loadidd_log("stopping: waiting for REFINED's run (at most %d ms)", REFINED_STOP_WAIT_MS);
+    const double end = loadid_mono_us() + REFINED_STOP_WAIT_MS * 1e3;
+    struct pollfd pfd = {.fd = L->refined_fd, .events = POLLIN};
+    double left_us;
+    while (!loadid_pipeline_refined_collect(L->pipe) && (left_us = end - loadid_mono_us()) > 0) {
+        if (poll(&pfd, 1, (int)(left_us / 1e3) + 1) < 0 && errno != EINTR) break;
+    }
+    if (loadid_pipeline_refined_pending(L->pipe)) {
+        loadidd_log("REFINED's run has not ended after %d ms: stopping without its estimate",
+                    REFINED_STOP_WAIT_MS);
+        return 1;
+    }
+    if (L->done_pending) save_done(L);
+    return 0;
+}
+
 /* ---------------------------------------------------------------- loop */
 
 enum { TAG_LCM = 1, TAG_INPUT, TAG_TICK, TAG_SIGNAL, TAG_REFINED };
@@ -200,6 +238,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     L.cfg = cfg;
     L.opt = opt;
     L.input_fd = -1;
+    L.refined_fd = -1;
     char err[4600];
     loadid_pipeline_sink_t sink = {.ctx = &L, .estimate = on_estimate, .wrench = on_wrench,
                                    .state = on_state, .log = on_log};
@@ -254,6 +293,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                         strerror(refined_fd < 0 ? -refined_fd : errno));
             rc = 1;
         }
+        if (refined_fd >= 0) L.refined_fd = refined_fd;
     }
     /* The save worker likewise (save_worker.h: the disk's waits off the
      * loop), before the Modbus poller (the input) and the real-time set-up. */
@@ -309,6 +349,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         if (stop) break;
     }
     loadid_notify_stopping();
+    const int refined_running = finish_refined(&L);
     loadid_input_finish(&L.input);
     if (opt->verbose) {
         loadid_pipeline_status_t st;
@@ -325,6 +366,6 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     if (tick_fd >= 0) close(tick_fd);
     if (sig_fd >= 0) close(sig_fd);
     loadid_lcm_link_close(&L.lcm);
-    loadid_pipeline_destroy(L.pipe);
+    if (!refined_running) loadid_pipeline_destroy(L.pipe); /* else its job still uses it */
     return rc;
 }
