@@ -6,15 +6,18 @@ estimates are loadidd --offline's on the same recording to 1e-9, as the
 other live sessions' are, and they arrive over LCM: estimate_t while
 estimating and at DONE, load_model_t, status_t with the state changes,
 wrench_t once DONE; and the loop allocates nothing meanwhile (release
-build). Plus the refusals of the command line, which need no session."""
+build). Plus the refusals of the command line, which need no session,
+and a SIGTERM while REFINED runs (LCM on memq://): the stop waits for it."""
 
 from __future__ import annotations
 
 import json
 import os
+import pathlib
 import re
 import signal
 import subprocess
+import threading
 import time
 
 import numpy as np
@@ -155,3 +158,43 @@ def test_replay_without_commands_leaves_them_to_lcm(recording, tmp_path):
     assert m and int(m.group(2)) >= 1000, err  # a second of 1 kHz joint states went in
     ok = re.search(r"^loadidd: samples ok (\d+), used 0,", err, re.M)
     assert ok and int(ok.group(1)) >= 1000, err
+
+
+
+def test_sigterm_while_refined_runs_waits_for_it(recording, offline, tmp_path):
+    """SIGTERM as soon as the daemon says DONE, while REFINED runs on its
+    worker (about 14 ms): the daemon waits for the run (live.c's
+    finish_refined), logs it and saves the final estimate, REFINED's (the
+    primary: ties go to it), before it exits 0; the saved phi is
+    --offline's REFINED to 1e-9. Before, the stop lost both. A session
+    whose SIGTERM came after the run had ended (a loaded machine) shows
+    nothing: up to three (3 s each, LCM on memq://)."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("lcm:\n  url: memq://\nestimation:\n  methods: [RTLS, RIV, RLS, REFINED]\n"
+                   f"results:\n  directory: {tmp_path / 'results'}\n")
+    for _ in range(3):
+        daemon = subprocess.Popen([program("LOADIDD_EXE"), "--config", str(cfg), "--replay",
+                                   str(recording), "--verbose"], stderr=subprocess.PIPE, text=True)
+        guard = threading.Timer(30, daemon.kill)
+        guard.start()
+        lines = []
+        for line in daemon.stderr:
+            lines.append(line)
+            if re.match(r"^loadidd: \d+: DONE$", line):
+                daemon.send_signal(signal.SIGTERM)
+                break
+        err = "".join(lines) + daemon.communicate(timeout=30)[1]
+        guard.cancel()
+        assert daemon.returncode == 0, err
+        waited = err.find("loadidd: stopping: waiting for REFINED's run (at most 2000 ms)\n")
+        if waited >= 0:
+            break
+    assert waited >= 0, err  # the stop came while REFINED ran, in one session of three
+    after = err[waited:]
+    assert re.search(r"^loadidd: REFINED: 1500 samples on the smoothed joints", after, re.M), err
+    saved = re.search(r"^loadidd: saved (\S+)$", after, re.M)
+    assert saved, err
+    text = pathlib.Path(saved.group(1)).read_text()
+    assert re.search(r"^method: REFINED$", text, re.M), text
+    phi = json.loads(re.search(r"^phi: (\[.*\])$", text, re.M).group(1))
+    np.testing.assert_allclose(phi, offline["result"]["REFINED"]["phi"], rtol=1e-9, atol=1e-12)

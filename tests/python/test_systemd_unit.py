@@ -13,6 +13,10 @@ checked as far as it can be without systemd as PID 1 (CI has none):
   RestrictAddressFamilies=, no mapping writable and executable
   (MemoryDenyWriteExecute=), and every file it opened for writing in its
   results folder (ProtectSystem=strict with the state directory);
+- the same trace, thread by thread: from its first epoll_wait on, the
+  loop's thread makes no file-system call (saving the result is the save
+  worker's, host/src/daemon/save_worker.c), while another thread of the daemon
+  did save it (open, write, fsync, rename);
 - without the capabilities the same daemon fails to start (so the session
   above shows the capabilities are what it needs, and enough).
 """
@@ -147,8 +151,9 @@ def privileged(tmp, daemon, caps, trace=None):
     if caps:
         args.append("--ambient-caps=" + caps_arg)
     if trace:
-        # -f: the worker thread too; -e signal=none: no signal lines.
-        args += ["strace", "-f", "-qq", "-e", "signal=none", "-o", str(trace)]
+        # -f: the worker threads too; -y: descriptors with their paths;
+        # -e signal=none: no signal lines.
+        args += ["strace", "-f", "-y", "-qq", "-e", "signal=none", "-o", str(trace)]
     wrapper = tmp / ("loadidd-traced" if trace else "loadidd-as-unit")
     wrapper.write_text(WRAPPER.format(python=sys.executable, args=args + [str(daemon)],
                                       traced=bool(trace)))
@@ -205,25 +210,36 @@ def test_daemon_runs_a_session_with_only_the_units_privileges(unit_session):
     assert s["trace"], "no strace output"
 
 
-def traced_calls(trace):
-    """(name, arguments, result) of every completed system call in an
-    strace -f log (resumed calls joined)."""
+def thread_calls(trace):
+    """(thread id, name, arguments, result) of every completed system call
+    in an strace -f log, in the order they began (resumed calls joined)."""
     calls, pending = [], {}
     for line in trace.splitlines():
         m = re.match(r"^(\d+)\s+(.*)$", line)
         if not m:
             continue
-        pid, rest = m.groups()
+        tid, rest = m.groups()
         if rest.endswith("<unfinished ...>"):
-            pending[pid] = rest[: -len("<unfinished ...>")]
+            pending[tid] = (len(calls), rest[: -len("<unfinished ...>")])
+            calls.append(None)  # its place, filled when it resumes
             continue
+        at = len(calls)
         r = re.match(r"^<\.\.\. (\w+) resumed>(.*)$", rest)
         if r:
-            rest = pending.pop(pid, r.group(1) + "(") + r.group(2)
+            at, begun = pending.pop(tid, (at, r.group(1) + "("))
+            rest = begun + r.group(2)
+        if at == len(calls):
+            calls.append(None)
         c = re.match(r"^(\w+)\((.*)\)\s+=\s+(.*)$", rest)
         if c:
-            calls.append(c.groups())
-    return calls
+            calls[at] = (int(tid),) + c.groups()
+    return [c for c in calls if c]
+
+
+def traced_calls(trace):
+    """(name, arguments, result) of every completed system call in an
+    strace -f log."""
+    return [c[1:] for c in thread_calls(trace)]
 
 
 def test_every_system_call_is_in_the_units_filter(unit_session):
@@ -261,6 +277,49 @@ def test_files_are_written_only_where_the_unit_allows(unit_session):
             continue
         for path in re.findall(r'"([^"]*)"', args):
             assert path.startswith(results + "/") or path.startswith("/dev/"), (name, args)
+
+
+# What touches the file system: opening, creating, renaming, removing,
+# syncing, truncating, changing modes or owners, and writing to a regular
+# file (-y names it: a path outside /dev; stderr is a pipe here). Reading
+# is not in it: --can-file's frames are read from a file by design.
+FS_CALLS = {"open", "openat", "openat2", "creat", "rename", "renameat", "renameat2", "unlink",
+            "unlinkat", "mkdir", "mkdirat", "rmdir", "link", "linkat", "symlink", "symlinkat",
+            "truncate", "ftruncate", "fallocate", "fsync", "fdatasync", "sync", "syncfs",
+            "sync_file_range", "chmod", "fchmod", "fchmodat", "chown", "fchown", "fchownat",
+            "lchown"}
+WRITES = {"write", "pwrite64", "writev", "pwritev", "pwritev2"}
+
+
+def file_system_call(name, args):
+    if name in FS_CALLS:
+        return True
+    fd = re.match(r"\d+<([^>]*)>", args)
+    return name in WRITES and bool(fd) and fd.group(1).startswith("/") \
+        and not fd.group(1).startswith("/dev/")
+
+
+def test_the_loop_thread_makes_no_file_system_call(unit_session):
+    """Issue 14: nothing blocks the loop. A disk that stalls (fsync of the
+    saved result on a busy disk takes tens of ms) must not stall the 1 kHz
+    loop, so from its first epoll_wait (start-up over) to its exit the
+    loop's thread, the daemon's first, makes no file-system call; the
+    control: in the same session another thread of the daemon saved the
+    result (opened, wrote, synced and renamed it into results/)."""
+    calls = thread_calls(unit_session["trace"])
+    loop = calls[0][0]
+    assert calls[0][1] == "execve" and "loadidd" in calls[0][2], calls[0]
+    start = next(i for i, c in enumerate(calls)
+                 if c[0] == loop and c[1] in ("epoll_wait", "epoll_pwait"))
+    in_loop = [c for c in calls[start:] if c[0] == loop and file_system_call(c[1], c[2])]
+    assert not in_loop, "file-system calls on the loop's thread:\n" + "\n".join(map(str, in_loop))
+    results = str(unit_session["results"]) + "/"
+    saver = {c[0] for c in calls[start:] if c[1].startswith("rename") and results in c[2]
+             and c[3] == "0"}
+    assert len(saver) == 1 and loop not in saver, saver
+    done = {c[1] for c in calls[start:] if c[0] in saver and file_system_call(c[1], c[2])}
+    assert {"openat", "write", "fsync", "rename"} <= done, done
+    assert (unit_session["results"] / "latest.yaml").exists()
 
 
 @pytest.mark.parametrize("key, limit, reason", [

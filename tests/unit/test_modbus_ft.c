@@ -2,7 +2,8 @@
  * Tests of the Modbus RTU F/T sensor (proto/modbus_ft.md): the pure
  * decoder with register vectors (drivers/modbus_ft.h), then the libmodbus
  * client against a real libmodbus RTU server over a real pseudo-terminal
- * pair (no mocks), then the poller thread (host/src/daemon/inputs/modbus_input.h).
+ * pair (no mocks), then the poller thread (host/src/daemon/inputs/modbus_input.h),
+ * its real-time attributes read back from the kernel.
  *
  * The pty: openpty() gives a master descriptor and a slave /dev/pts/N. The
  * sensor (loadid_modbus_ft_server, modbus_reply over a modbus_mapping_t)
@@ -12,7 +13,7 @@
  * values are computed here as counts * full_scale / 16384 from the counts
  * the test itself put into the server's registers.
  */
-#define _DEFAULT_SOURCE /* cfmakeraw, openpty */
+#define _GNU_SOURCE /* cfmakeraw, openpty; sched_getaffinity, CPU_* */
 
 #include <stdarg.h>
 #include <stddef.h>
@@ -22,8 +23,10 @@
 
 #include <errno.h>
 #include <math.h>
+#include <dirent.h>
 #include <pthread.h>
 #include <pty.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -855,6 +858,95 @@ static void poller_device_loss(void **state)
     assert_int_equal(st.ft.counter_gaps, 0);
 }
 
+/* The poller thread's id, found by its name ("loadid-modbus", which it
+ * gives itself as it starts: waits up to 2 s); 0 when there is none. */
+static pid_t poller_tid(int wait_ms)
+{
+    const int64_t end = mono_ms() + wait_ms;
+    do {
+        DIR *d = opendir("/proc/self/task");
+        assert_non_null(d);
+        struct dirent *e;
+        pid_t found = 0;
+        while (!found && (e = readdir(d))) {
+            char path[300], comm[32] = "";
+            snprintf(path, sizeof path, "/proc/self/task/%s/comm", e->d_name);
+            FILE *f = fopen(path, "r");
+            if (!f) continue;
+            if (fgets(comm, sizeof comm, f) && !strcmp(comm, "loadid-modbus\n"))
+                found = (pid_t)atoi(e->d_name);
+            fclose(f);
+        }
+        closedir(d);
+        if (found || wait_ms == 0) return found;
+        usleep(10000);
+    } while (mono_ms() < end);
+    return 0;
+}
+
+/* realtime.priority and realtime.cpu reach the poller thread: SCHED_FIFO
+ * one below the loop's priority (at 1 when that is 1), pinned to the
+ * configured CPU, as the kernel reports them for its thread id; neither
+ * set, it keeps the normal scheduler and the process's CPUs; a CPU that
+ * does not exist is refused with the key in the reason, and no poller
+ * thread is left. SCHED_FIFO needs root (or CAP_SYS_NICE): CI's tests run
+ * as root. */
+static void poller_realtime_attributes(void **state)
+{
+    (void)state;
+    if (geteuid() != 0) {
+        const char *ci = getenv("CI");
+        if (ci && !strcmp(ci, "true")) fail_msg("SCHED_FIFO needs root; CI runs as root");
+        print_message("    not root: skipped\n");
+        g_skipped = 1;
+        skip();
+    }
+    cpu_set_t mine;
+    assert_int_equal(sched_getaffinity(0, sizeof mine, &mine), 0);
+    int cpu = -1; /* the last of ours: not what an unpinned thread has, on 2 CPUs or more */
+    for (int c = 0; c < CPU_SETSIZE; ++c)
+        if (CPU_ISSET(c, &mine)) cpu = c;
+    const struct {
+        int priority, cpu, policy, poller_priority;
+    } cases[] = {{20, cpu, SCHED_FIFO, 19}, {1, -1, SCHED_FIFO, 1}, {0, cpu, SCHED_OTHER, 0},
+                 {0, -1, SCHED_OTHER, 0}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        loadid_config_t cfg = poller_cfg(200.0); /* no sensor: the thread retries opens */
+        cfg.rt_priority = cases[k].priority;
+        cfg.rt_cpu = cases[k].cpu;
+        loadid_modbus_input_t *in = NULL;
+        char err[256] = "";
+        assert_int_equal(loadid_modbus_input_start(&cfg, &in, err, sizeof err), 0);
+        const pid_t tid = poller_tid(2000);
+        assert_true(tid > 0);
+        struct sched_param sp;
+        cpu_set_t set;
+        const int policy = sched_getscheduler(tid);
+        assert_int_equal(sched_getparam(tid, &sp), 0);
+        assert_int_equal(sched_getaffinity(tid, sizeof set, &set), 0);
+        loadid_modbus_input_stop(in);
+        print_message("    realtime.priority %d, cpu %d: poller policy %d priority %d on %d "
+                      "CPUs\n", cases[k].priority, cases[k].cpu, policy, sp.sched_priority,
+                      CPU_COUNT(&set));
+        assert_int_equal(policy, cases[k].policy);
+        assert_int_equal(sp.sched_priority, cases[k].poller_priority);
+        if (cases[k].cpu >= 0) {
+            assert_int_equal(CPU_COUNT(&set), 1);
+            assert_true(CPU_ISSET(cases[k].cpu, &set));
+        } else {
+            assert_true(CPU_EQUAL(&set, &mine));
+        }
+    }
+    loadid_config_t cfg = poller_cfg(200.0);
+    cfg.rt_cpu = 4095; /* the configuration's largest: no such CPU here */
+    loadid_modbus_input_t *in = NULL;
+    char err[256] = "";
+    assert_int_equal(loadid_modbus_input_start(&cfg, &in, err, sizeof err), -EINVAL);
+    assert_null(in);
+    assert_string_equal(err, "realtime.cpu 4095: the poller thread: Invalid argument");
+    assert_int_equal(poller_tid(0), 0); /* stopped and gone */
+}
+
 /* loadid-modbus-sim (tools/modbus_sim), when ctest says where it is: its
  * constant wrench read back through the driver. */
 static void simulator_serves_a_constant_wrench(void **state)
@@ -933,6 +1025,7 @@ int main(void)
         cmocka_unit_test_teardown(pty_device_vanishes_and_returns, stop_sensors),
         cmocka_unit_test_teardown(poller_delivers_in_order, stop_sensors),
         cmocka_unit_test_teardown(poller_device_loss, stop_sensors),
+        cmocka_unit_test(poller_realtime_attributes),
         cmocka_unit_test_teardown(simulator_serves_a_constant_wrench, stop_sensors),
     };
     const int failed = cmocka_run_group_tests(tests, setup_dir, teardown_dir);

@@ -142,9 +142,11 @@ typedef struct {
     double modbus_fs_moment[3];         /* [N m], default 12; likewise */
 
     /* realtime: (loadid) the live service's scheduling. priority: SCHED_FIFO
-     * priority 1..99, 0 (default) leaves the normal scheduler; lock_memory:
-     * mlockall, default false; cpu: pin to this CPU, -1 (default) any. A
-     * setting that cannot be applied is an error at start-up. */
+     * priority 1..99 of the loop (the Modbus poller thread: one below, at
+     * least 1), 0 (default) leaves the normal scheduler; lock_memory:
+     * mlockall, default false; cpu: pin the loop and the poller to this
+     * CPU, -1 (default) any. A setting that cannot be applied is an error
+     * at start-up. */
     int rt_priority;
     int rt_lock_memory;
     int rt_cpu;

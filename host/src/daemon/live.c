@@ -7,12 +7,14 @@
  *     candump log, the Modbus poller or a replayed recording);
  *   - a 10 ms timerfd that ends zeroing and estimation windows on time and
  *     publishes status_t once a second (status.c);
- *   - a signalfd for SIGTERM and SIGINT (a clean stop);
+ *   - a signalfd for SIGTERM and SIGINT (a clean stop, after a REFINED
+ *     run still going: finish_refined);
  *   - REFINED's worker thread (the pipeline's worker.h), when configured:
  *     its end.
  * The pipeline's outputs go out on LCM as they come (lcm_out.c): estimate_t
  * on LOADID_ESTIMATE, wrench_t on LOADID_WRENCH, and at DONE load_model_t
- * on LOADID_MODEL with the estimate saved (results.c). status_t also goes
+ * on LOADID_MODEL with the estimate handed to the save worker (results.c,
+ * save_worker.h), which writes it on a thread of its own. status_t also goes
  * out at every state change, once the event that made it is handled, with
  * the change's time as its utime: a command's change carries the command's
  * own utime, which is how the CLI knows the acknowledgement of its
@@ -23,12 +25,16 @@
  * (tests/python/test_live_no_alloc.py proves it under an
  * allocation-counting LD_PRELOAD): messages are encoded and decoded by
  * drivers/lcm_wire.h on static buffers, LCM on udpm:// goes through the
- * daemon's own sockets, and a finished estimate is saved without stdio.
+ * daemon's own sockets, and a finished estimate is saved by a thread of
+ * its own (save_worker.h): after start-up the loop makes no file-system
+ * call but --can-file's and --replay's reads
+ * (tests/python/test_systemd_unit.py traces it).
  */
 #define _GNU_SOURCE
 #include "live.h"
 
 #include <errno.h>
+#include <poll.h>
 #include <signal.h>
 #include <stdint.h>
 #include <string.h>
@@ -64,9 +70,11 @@ typedef struct {
     loadid_lcm_inputs_t lcm_in;
     loadid_input_t input;
     int input_fd;                 /* the input's descriptor in the epoll set, or -1 */
+    int refined_fd;               /* REFINED's worker's end (worker.h), or -1 */
     loadid_loop_times_t times;
     int ticks;
     int done_pending;             /* DONE reached: save the estimate */
+    loadid_save_worker_t *saver;  /* results.directory set, else NULL */
     struct {
         int64_t utime;
         int8_t state;
@@ -123,15 +131,50 @@ static void publish_status(live_t *L, int periodic, int state, int64_t utime) {
     publish(L, CH_STATUS, loadid_lcm_encode_status(&m, tx_buf, sizeof tx_buf));
 }
 
-/* DONE: the best load model out on LOADID_MODEL, and the estimate into
- * results.directory (when configured). */
+/* DONE: the best load model out on LOADID_MODEL, and the estimate handed
+ * to the save worker (when results.directory is configured). */
 static void save_done(live_t *L) {
     L->done_pending = 0;
     loadid_pipeline_estimate_t e;
     loadid_pipeline_compensation_t c;
     if (loadid_pipeline_final(L->pipe, &e, &c) != 0) return;
     if (e.has_model) publish(L, CH_MODEL, loadid_lcm_out_load_model(&e, tx_buf, sizeof tx_buf));
-    loadid_results_save(L->cfg, &e, &c);
+    loadid_results_save(L->cfg, L->saver, &e, &c);
+}
+
+/* At the stop, a REFINED run still on its worker (SIGTERM soon after DONE:
+ * the estimate the model and the saved result wait for, often the best)
+ * is waited for, then published and saved as the loop would have done.
+ *
+ * At most 2 s. The run is a batch over the window: about 14 ms on the
+ * robot's PC, some hundred ms under ASan on a loaded machine; one not
+ * ended after 2 s (over a hundred times its usual time) is starved or
+ * stuck, and the stop must not wait on it: systemd's watchdog is off
+ * while a unit stops, so nothing but TimeoutStopSec (90 s by default,
+ * then SIGKILL) would end the wait, and a restart waits for the stop.
+ * 2 s is also what the unit's WatchdogSec allows a running daemon to be
+ * silent. Returns 0, or 1 when the run is still going: its memory (the
+ * pipeline's, which it alone uses: copies of the configuration and the
+ * chain) is then left to the exit, not freed under it. poll, and what the
+ * loop does at REFINED's end: nothing allocated. */
+enum { REFINED_STOP_WAIT_MS = 2000 };
+
+static int finish_refined(live_t *L) {
+    if (L->refined_fd < 0 || !loadid_pipeline_refined_pending(L->pipe)) return 0;
+    loadidd_log("stopping: waiting for REFINED's run (at most %d ms)", REFINED_STOP_WAIT_MS);
+    const double end = loadid_mono_us() + REFINED_STOP_WAIT_MS * 1e3;
+    struct pollfd pfd = {.fd = L->refined_fd, .events = POLLIN};
+    double left_us;
+    while (!loadid_pipeline_refined_collect(L->pipe) && (left_us = end - loadid_mono_us()) > 0) {
+        if (poll(&pfd, 1, (int)(left_us / 1e3) + 1) < 0 && errno != EINTR) break;
+    }
+    if (loadid_pipeline_refined_pending(L->pipe)) {
+        loadidd_log("REFINED's run has not ended after %d ms: stopping without its estimate",
+                    REFINED_STOP_WAIT_MS);
+        return 1;
+    }
+    if (L->done_pending) save_done(L);
+    return 0;
 }
 
 /* ---------------------------------------------------------------- loop */
@@ -195,6 +238,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     L.cfg = cfg;
     L.opt = opt;
     L.input_fd = -1;
+    L.refined_fd = -1;
     char err[4600];
     loadid_pipeline_sink_t sink = {.ctx = &L, .estimate = on_estimate, .wrench = on_wrench,
                                    .state = on_state, .log = on_log};
@@ -249,7 +293,11 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                         strerror(refined_fd < 0 ? -refined_fd : errno));
             rc = 1;
         }
+        if (refined_fd >= 0) L.refined_fd = refined_fd;
     }
+    /* The save worker likewise (save_worker.h: the disk's waits off the
+     * loop), before the Modbus poller (the input) and the real-time set-up. */
+    if (rc == 0) rc = loadid_results_start(cfg, &L.saver);
     if (rc == 0) rc = open_input(&L);
     if (rc == 0) sync_input_fd(&L, ep);
     if (rc == 0 && loadid_realtime_setup(cfg, err, sizeof err) != 0) {
@@ -297,9 +345,11 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         L.num_changes = 0;
         /* The model and the saved result wait for REFINED, which may be the best. */
         if (L.done_pending && !loadid_pipeline_refined_pending(L.pipe)) save_done(&L);
+        loadid_results_log(L.saver);
         if (stop) break;
     }
     loadid_notify_stopping();
+    const int refined_running = finish_refined(&L);
     loadid_input_finish(&L.input);
     if (opt->verbose) {
         loadid_pipeline_status_t st;
@@ -310,11 +360,12 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         loadid_input_summary(&L.input);
     }
     publish_status(&L, 1, 0, 0);
+    loadid_results_stop(L.saver); /* the saves submitted end, and are logged */
     loadid_input_close(&L.input);
     if (ep >= 0) close(ep);
     if (tick_fd >= 0) close(tick_fd);
     if (sig_fd >= 0) close(sig_fd);
     loadid_lcm_link_close(&L.lcm);
-    loadid_pipeline_destroy(L.pipe);
+    if (!refined_running) loadid_pipeline_destroy(L.pipe); /* else its job still uses it */
     return rc;
 }

@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "log.h"
 #include "saved_result.h"
@@ -19,13 +20,32 @@ int loadid_results_restore(const loadid_config_t *cfg, loadid_pipeline_t *pipe,
     return rc;
 }
 
-void loadid_results_save(const loadid_config_t *cfg, const loadid_pipeline_estimate_t *e,
+int loadid_results_start(const loadid_config_t *cfg, loadid_save_worker_t **saver) {
+    *saver = NULL;
+    if (!cfg->results_directory[0]) return 0;
+    const int rc = loadid_save_worker_start(cfg->results_directory, saver);
+    if (rc != 0) {
+        loadidd_log("cannot start the save worker: %s", strerror(-rc));
+        return 1;
+    }
+    return 0;
+}
+
+void loadid_results_save(const loadid_config_t *cfg, loadid_save_worker_t *saver,
+                         const loadid_pipeline_estimate_t *e,
                          const loadid_pipeline_compensation_t *c) {
-    if (!cfg->results_directory[0]) return;
-    char path[4400], err[4600];
-    if (loadid_saved_result_write(cfg->results_directory, e, c, path, sizeof path, err,
-                                  sizeof err) != 0)
-        loadidd_log("%s", err);
-    else
-        loadidd_log("saved %s", path);
+    if (saver && loadid_save_worker_submit(saver, e, c) != 0)
+        loadidd_log("%s: estimate of %lld not saved: %d saves before it still wait for the disk",
+                    cfg->results_directory, (long long)e->utime, LOADID_SAVE_WORKER_SLOTS);
+}
+
+void loadid_results_log(loadid_save_worker_t *saver) {
+    char msg[4608];
+    while (saver && loadid_save_worker_collect(saver, msg, sizeof msg) != 0) loadidd_log("%s", msg);
+}
+
+void loadid_results_stop(loadid_save_worker_t *saver) {
+    loadid_save_worker_stop(saver); /* the saves submitted end first */
+    loadid_results_log(saver);
+    loadid_save_worker_destroy(saver);
 }

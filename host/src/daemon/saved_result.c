@@ -14,9 +14,10 @@
 #include "loadid/core.h"
 #include "loadid/yaml_tree.h"
 
-/* The writer allocates nothing (it runs in loadidd's loop when an
- * estimation ends): the document is formatted into a fixed buffer with
- * snprintf and written with open, write and rename, no stdio streams. */
+/* The writer allocates nothing (it runs on loadidd's save worker,
+ * save_worker.h, inside the window where the daemon allocates nothing):
+ * the document is formatted into a fixed buffer with snprintf and written
+ * with open, write, fsync and rename, no stdio streams. */
 
 typedef struct {
     char *p;
@@ -103,7 +104,9 @@ static void format_doc(doc_t *d, const loadid_pipeline_estimate_t *e,
         com[0], com[1], com[2], mass, in[0], in[1], in[2], in[3], in[4], in[5]);
 }
 
-/* path.tmp, then renamed over path: a reader never sees half a file. */
+/* path.tmp, synced, then renamed over path: a reader never sees half a
+ * file, nor an empty one after a power loss (the rename may reach the disk
+ * before the data otherwise). */
 static int write_one(const char *path, const char *text, size_t n) {
     char tmp[4400];
     if ((size_t)snprintf(tmp, sizeof tmp, "%s.tmp", path) >= sizeof tmp) return -ENAMETOOLONG;
@@ -115,6 +118,7 @@ static int write_one(const char *path, const char *text, size_t n) {
         if (w < 0 && errno != EINTR) rc = -errno;
         else if (w > 0) done += (size_t)w;
     }
+    if (!rc && fsync(fd) != 0) rc = -errno;
     if (close(fd) != 0 && !rc) rc = -errno;
     if (!rc && rename(tmp, path) != 0) rc = -errno;
     if (rc) unlink(tmp);

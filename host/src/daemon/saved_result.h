@@ -22,10 +22,11 @@
 #include "loadid/pipeline.h"
 
 /* Writes dir/<load_name or "load">-<utime>.yaml and dir/latest.yaml
- * (created if missing), each through a .tmp file renamed over it.
- * path (may be NULL) receives the first's name. Allocates nothing (no
- * stdio: a fixed buffer, open, write, rename), for loadidd's loop calls
- * it. Returns 0 or -errno (-EOVERFLOW: the document outgrew its buffer)
+ * (created if missing), each through a .tmp file synced and renamed over
+ * it. path (may be NULL) receives the first's name. Allocates nothing (no
+ * stdio: a fixed buffer, open, write, fsync, rename), for loadidd's save
+ * worker calls it (save_worker.h: it waits for the disk, so never on the
+ * loop). Returns 0 or -errno (-EOVERFLOW: the document outgrew its buffer)
  * with a reason in err. */
 int loadid_saved_result_write(const char *dir, const loadid_pipeline_estimate_t *est,
                               const loadid_pipeline_compensation_t *comp, char *path,

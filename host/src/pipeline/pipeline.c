@@ -225,11 +225,13 @@ void loadid_pipeline_trace_rows(loadid_pipeline_t *p, int on) {
 
 void loadid_pipeline_destroy(loadid_pipeline_t *p) {
     if (!p) return;
+    /* First: a running REFINED job (a stop while it runs) uses the
+     * estimators and the REFINED state below; this waits for its end. */
+    loadid_worker_destroy(p->worker);
     for (int m = 0; m < LOADID_MAX_METHODS; ++m) loadid_est_destroy(p->est[m]);
     loadid_signals_destroy(p->sig);
     loadid_jr3_decoder_destroy(p->jr3);
     loadid_kin_destroy(p->kin);
-    loadid_worker_destroy(p->worker); /* before what its job uses */
     loadid_refined_destroy(p->refined);
     free(p);
 }

@@ -1,10 +1,11 @@
 /* The Modbus F/T poller thread and its SPSC ring (modbus_input.h). */
-#define _GNU_SOURCE /* pthread_setname_np */
+#define _GNU_SOURCE /* pthread_setname_np, pthread_setaffinity_np */
 
 #include "modbus_input.h"
 
 #include <errno.h>
 #include <pthread.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -134,6 +135,9 @@ static int backoff(int ms)
 static void *poller(void *arg)
 {
     loadid_modbus_input_t *in = arg;
+    /* Named from inside (a prctl): another thread's name is written
+     * through /proc. */
+    pthread_setname_np(pthread_self(), "loadid-modbus");
     int64_t next = mono_ns();
     int retry_ms = in->retry_min_ms;
     while (!atomic_load(&in->stop)) {
@@ -186,6 +190,36 @@ static void *poller(void *arg)
     return NULL;
 }
 
+/* realtime.cpu and realtime.priority for the poller thread (modbus_input.h
+ * says why one below the loop). 0, or -errno with the reason in err. */
+static int poller_realtime(const loadid_config_t *cfg, pthread_t thread, char *err,
+                           size_t errlen)
+{
+    if (cfg->rt_cpu >= 0) {
+        cpu_set_t set;
+        CPU_ZERO(&set);
+        CPU_SET(cfg->rt_cpu, &set);
+        const int rc = pthread_setaffinity_np(thread, sizeof set, &set);
+        if (rc != 0) {
+            snprintf(err, errlen, "realtime.cpu %d: the poller thread: %s", cfg->rt_cpu,
+                     strerror(rc));
+            return -rc;
+        }
+    }
+    if (cfg->rt_priority > 0) {
+        const int prio = cfg->rt_priority > 1 ? cfg->rt_priority - 1 : 1;
+        const struct sched_param sp = {.sched_priority = prio};
+        const int rc = pthread_setschedparam(thread, SCHED_FIFO, &sp);
+        if (rc != 0) {
+            snprintf(err, errlen,
+                     "realtime.priority %d: SCHED_FIFO %d for the poller thread: %s "
+                     "(LimitRTPRIO? root?)", cfg->rt_priority, prio, strerror(rc));
+            return -rc;
+        }
+    }
+    return 0;
+}
+
 int loadid_modbus_input_start(const loadid_config_t *cfg, loadid_modbus_input_t **out,
                               char *err, size_t errlen)
 {
@@ -235,7 +269,11 @@ int loadid_modbus_input_start(const loadid_config_t *cfg, loadid_modbus_input_t 
         snprintf(err, errlen, "modbus: cannot start the poller thread: %s", strerror(-rc));
         goto fail;
     }
-    pthread_setname_np(in->thread, "loadid-modbus");
+    rc = poller_realtime(cfg, in->thread, err, errlen);
+    if (rc < 0) {
+        loadid_modbus_input_stop(in);
+        return rc;
+    }
     *out = in;
     return 0;
 fail:

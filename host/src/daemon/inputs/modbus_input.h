@@ -20,6 +20,18 @@
  * a second costs about as long again, one that stays away costs an open
  * attempt a second. The first open also happens in the thread (a failure
  * there retries the same way), so start never blocks on the serial line.
+ *
+ * Real time (realtime.*, as the loop's): with realtime.priority P > 0 the
+ * thread runs SCHED_FIFO at P - 1 (at 1 when P is 1), and with
+ * realtime.cpu on that CPU. Above every normally scheduled task (builds,
+ * REFINED's and the save worker's threads, kernel workers), so that its
+ * poll period and its time stamp at the response hold on a loaded
+ * machine; below the loop, so that it never delays the loop's 1 ms
+ * deadline: a sample it reads waits for the loop anyway, so preempting
+ * the loop would only hold up what the loop is handling. At P = 1 the two
+ * are equal, and SCHED_FIFO does not preempt its equal either. The same
+ * CPU as the loop: the one set aside for the daemon; a poll costs the
+ * thread microseconds.
  */
 #ifndef LOADID_MODBUS_INPUT_H
 #define LOADID_MODBUS_INPUT_H
@@ -54,9 +66,11 @@ typedef struct loadid_modbus_input loadid_modbus_input_t; /* opaque */
 typedef void (*loadid_modbus_input_fn)(void *ctx, const loadid_modbus_ft_sample_t *s);
 
 /* Starts the poller on cfg's modbus.* keys (device, line, slave id,
- * timeout, full scales, rate_hz). Allocates everything here. Returns 0, or
- * a negative errno with a one-line reason in err (invalid settings, no
- * memory, no thread). */
+ * timeout, full scales, rate_hz) and realtime.priority and realtime.cpu
+ * (above). Allocates everything here. Returns 0, or a negative errno with
+ * a one-line reason in err (invalid settings, no memory, no thread, a
+ * real-time setting refused: "realtime.priority 10: SCHED_FIFO 9 for the
+ * poller thread: Operation not permitted (LimitRTPRIO? root?)"). */
 int loadid_modbus_input_start(const loadid_config_t *cfg, loadid_modbus_input_t **out,
                               char *err, size_t errlen);
 
