@@ -114,7 +114,7 @@ def test_status_counts_the_serial_samples(session):
 
 def test_sensor_lost_and_found_counted_as_it_happened(session, capsys):
     """Every fault counted as the sensors' own tallies say it happened
-    (issue 13: the non-zero counters in status_t): reads left unanswered
+    (the non-zero counters in status_t): reads left unanswered
     are the poller's timeouts and status_t.samples_incomplete, answers with
     a bad CRC its bad frames and status_t.frames_bad; the measurements it
     skipped (counter gaps) are the sensors' counters less those it got,

@@ -300,7 +300,7 @@ def file_system_call(name, args):
 
 
 def test_the_loop_thread_makes_no_file_system_call(unit_session):
-    """Issue 14: nothing blocks the loop. A disk that stalls (fsync of the
+    """Nothing blocks the loop. A disk that stalls (fsync of the
     saved result on a busy disk takes tens of ms) must not stall the 1 kHz
     loop, so from its first epoll_wait (start-up over) to its exit the
     loop's thread, the daemon's first, makes no file-system call; the
