@@ -46,6 +46,8 @@ TEST_PACKAGES=(
   # the fuzz preset: clang 14, and libFuzzer (libclang_rt.fuzzer), which
   # clang only recommends
   clang libclang-rt-14-dev
+  # format_check: the code as .clang-format says
+  clang-format
   # candump and canplayer (the VM's tests)
   can-utils
   # the live tests' private network namespace (ip; unshare is in util-linux)
