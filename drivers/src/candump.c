@@ -20,32 +20,28 @@ struct loadid_candump_reader {
     char buf[LOADID_CANDUMP_LINE_MAX + 3]; /* fgets's LINE_MAX + 1, and two '\n' after */
 };
 
-static bool is_blank(char c)
-{
+static bool is_blank(char c) {
     return c == ' ' || c == '\t';
 }
 
-static bool is_digit(char c)
-{
+static bool is_digit(char c) {
     return c >= '0' && c <= '9';
 }
 
 /* A hex digit's value plus 1, 0 for any other byte: a table, as the
  * three ranges' comparisons were most of a frame's parsing. */
 static const unsigned char hex_plus_1[256] = {
-    ['0'] = 1, ['1'] = 2, ['2'] = 3, ['3'] = 4, ['4'] = 5, ['5'] = 6, ['6'] = 7, ['7'] = 8,
-    ['8'] = 9, ['9'] = 10, ['A'] = 11, ['B'] = 12, ['C'] = 13, ['D'] = 14, ['E'] = 15,
-    ['F'] = 16, ['a'] = 11, ['b'] = 12, ['c'] = 13, ['d'] = 14, ['e'] = 15, ['f'] = 16,
+    ['0'] = 1,  ['1'] = 2,  ['2'] = 3,  ['3'] = 4,  ['4'] = 5,  ['5'] = 6,  ['6'] = 7,  ['7'] = 8,
+    ['8'] = 9,  ['9'] = 10, ['A'] = 11, ['B'] = 12, ['C'] = 13, ['D'] = 14, ['E'] = 15, ['F'] = 16,
+    ['a'] = 11, ['b'] = 12, ['c'] = 13, ['d'] = 14, ['e'] = 15, ['f'] = 16,
 };
 
-static int hex_value(char c)
-{
+static int hex_value(char c) {
     return (int)hex_plus_1[(unsigned char)c] - 1;
 }
 
 /* An interface name: 1..15 printable characters other than blanks. */
-static bool ifname_ok(const char *s, size_t n)
-{
+static bool ifname_ok(const char *s, size_t n) {
     if (n == 0 || n >= LOADID_CANDUMP_IFNAME_MAX) {
         return false;
     }
@@ -59,8 +55,7 @@ static bool ifname_ok(const char *s, size_t n)
 }
 
 int loadid_candump_format(const loadid_can_frame_t *frame, const char *ifname, char *buf,
-                          size_t size)
-{
+                          size_t size) {
     if (buf && size > 0) {
         buf[0] = '\0';
     }
@@ -93,8 +88,7 @@ int loadid_candump_format(const loadid_can_frame_t *frame, const char *ifname, c
 }
 
 /* "(digits.dddddd)" at *pp; advances *pp past ')'. */
-static int parse_time(const char **pp, int64_t *t_us)
-{
+static int parse_time(const char **pp, int64_t *t_us) {
     const char *p = *pp;
     if (*p != '(') {
         return LOADID_CANDUMP_E_SYNTAX;
@@ -138,8 +132,7 @@ static int parse_time(const char **pp, int64_t *t_us)
 }
 
 /* The frame token [s, e): "<id>#<data>". */
-static int parse_frame(const char *s, const char *e, loadid_can_frame_t *f)
-{
+static int parse_frame(const char *s, const char *e, loadid_can_frame_t *f) {
     const char *hash = memchr(s, '#', (size_t)(e - s));
     if (!hash) {
         return LOADID_CANDUMP_E_SYNTAX;
@@ -196,8 +189,7 @@ static int parse_frame(const char *s, const char *e, loadid_can_frame_t *f)
 }
 
 int loadid_candump_parse(const char *line, loadid_can_frame_t *frame,
-                         char ifname[LOADID_CANDUMP_IFNAME_MAX])
-{
+                         char ifname[LOADID_CANDUMP_IFNAME_MAX]) {
     if (!line || !frame) {
         return -EINVAL;
     }
@@ -259,30 +251,43 @@ int loadid_candump_parse(const char *line, loadid_can_frame_t *frame,
     return 0;
 }
 
-const char *loadid_candump_strerror(int code)
-{
+const char *loadid_candump_strerror(int code) {
     switch (code) {
-    case 0: return "success";
-    case LOADID_CANDUMP_E_SYNTAX: return "candump line: not \"(time) interface id#data\"";
-    case LOADID_CANDUMP_E_TIMESTAMP: return "candump line: time is not (seconds.microseconds) with 6 digits, or out of range";
-    case LOADID_CANDUMP_E_IFNAME: return "candump line: bad interface name";
-    case LOADID_CANDUMP_E_ID: return "candump line: identifier is not 3 or 8 hex digits of a standard or extended id";
-    case LOADID_CANDUMP_E_DATA: return "candump line: data is not 0 to 8 bytes of hex pairs";
-    case LOADID_CANDUMP_E_FD: return "candump line: a CAN FD frame (##), not classic CAN";
-    case LOADID_CANDUMP_E_REMOTE: return "candump line: a remote frame (#R), not a data frame";
-    case LOADID_CANDUMP_E_LONG_LINE: return "candump line: too long, or holds a NUL byte";
-    case -EINVAL: return "invalid argument";
-    case -ENOSPC: return "buffer too small";
-    case -ENOMEM: return "out of memory";
-    case -EIO: return "read error";
-    default: return "unknown error";
+        case 0:
+            return "success";
+        case LOADID_CANDUMP_E_SYNTAX:
+            return "candump line: not \"(time) interface id#data\"";
+        case LOADID_CANDUMP_E_TIMESTAMP:
+            return "candump line: time is not (seconds.microseconds) with 6 digits, or out of "
+                   "range";
+        case LOADID_CANDUMP_E_IFNAME:
+            return "candump line: bad interface name";
+        case LOADID_CANDUMP_E_ID:
+            return "candump line: identifier is not 3 or 8 hex digits of a standard or extended id";
+        case LOADID_CANDUMP_E_DATA:
+            return "candump line: data is not 0 to 8 bytes of hex pairs";
+        case LOADID_CANDUMP_E_FD:
+            return "candump line: a CAN FD frame (##), not classic CAN";
+        case LOADID_CANDUMP_E_REMOTE:
+            return "candump line: a remote frame (#R), not a data frame";
+        case LOADID_CANDUMP_E_LONG_LINE:
+            return "candump line: too long, or holds a NUL byte";
+        case -EINVAL:
+            return "invalid argument";
+        case -ENOSPC:
+            return "buffer too small";
+        case -ENOMEM:
+            return "out of memory";
+        case -EIO:
+            return "read error";
+        default:
+            return "unknown error";
     }
 }
 
 /* ---- Reader ------------------------------------------------------------ */
 
-int loadid_candump_reader_open(FILE *fp, loadid_candump_reader_t **out)
-{
+int loadid_candump_reader_open(FILE *fp, loadid_candump_reader_t **out) {
     if (!out) {
         return -EINVAL;
     }
@@ -299,13 +304,11 @@ int loadid_candump_reader_open(FILE *fp, loadid_candump_reader_t **out)
     return 0;
 }
 
-void loadid_candump_reader_close(loadid_candump_reader_t *r)
-{
+void loadid_candump_reader_close(loadid_candump_reader_t *r) {
     free(r);
 }
 
-long loadid_candump_reader_line(const loadid_candump_reader_t *r)
-{
+long loadid_candump_reader_line(const loadid_candump_reader_t *r) {
     return r ? r->line : 0;
 }
 
@@ -317,8 +320,7 @@ long loadid_candump_reader_line(const loadid_candump_reader_t *r)
  * is filled with '\n' first, so fgets's own NUL is the one followed by
  * two of them (after the line's data, only its last byte can be a '\n');
  * any NUL before it was in the line. */
-static int read_line(loadid_candump_reader_t *r)
-{
+static int read_line(loadid_candump_reader_t *r) {
     bool too_long = false, nul = false, any = false, newline = false;
     for (;;) {
         memset(r->buf, '\n', sizeof r->buf);
@@ -356,8 +358,7 @@ static int read_line(loadid_candump_reader_t *r)
 }
 
 int loadid_candump_read(loadid_candump_reader_t *r, loadid_can_frame_t *frame,
-                        char ifname[LOADID_CANDUMP_IFNAME_MAX])
-{
+                        char ifname[LOADID_CANDUMP_IFNAME_MAX]) {
     if (!r || !frame) {
         return -EINVAL;
     }

@@ -15,9 +15,9 @@
 static const double fs_divisor[LOADID_JR3_NUM_GROUPS] = {10.0, 100.0, 100.0, 10.0};
 
 enum phase {
-    PHASE_IDLE = 0,     /* no sample open: none begun yet, or the last is complete */
-    PHASE_ASSEMBLING,   /* sample `seq` open, groups in `mask` received */
-    PHASE_DISCARDING    /* sample `seq` abandoned after a duplicate */
+    PHASE_IDLE = 0,   /* no sample open: none begun yet, or the last is complete */
+    PHASE_ASSEMBLING, /* sample `seq` open, groups in `mask` received */
+    PHASE_DISCARDING  /* sample `seq` abandoned after a duplicate */
 };
 
 struct loadid_jr3_decoder {
@@ -26,37 +26,32 @@ struct loadid_jr3_decoder {
     bool begun;                          /* a sequence number was seen */
     uint8_t seq;                         /* the last sequence number begun */
     enum phase phase;
-    unsigned mask;                       /* groups received (bit g) */
+    unsigned mask; /* groups received (bit g) */
     loadid_jr3_sample_t partial;
     loadid_jr3_stats_t st;
 };
 
 /* Little-endian helpers: explicit byte arithmetic, no type punning. */
-static int16_t get_i16(const uint8_t *p)
-{
+static int16_t get_i16(const uint8_t *p) {
     uint16_t u = (uint16_t)(p[0] | (p[1] << 8));
     /* Two's complement without implementation-defined conversion. */
     return u >= 0x8000u ? (int16_t)((int32_t)u - 65536) : (int16_t)u;
 }
 
-static uint16_t get_u16(const uint8_t *p)
-{
+static uint16_t get_u16(const uint8_t *p) {
     return (uint16_t)(p[0] | (p[1] << 8));
 }
 
-static void put_u16(uint8_t *p, uint16_t v)
-{
+static void put_u16(uint8_t *p, uint16_t v) {
     p[0] = (uint8_t)(v & 0xFFu);
     p[1] = (uint8_t)(v >> 8);
 }
 
-static void put_i16(uint8_t *p, int16_t v)
-{
+static void put_i16(uint8_t *p, int16_t v) {
     put_u16(p, (uint16_t)((int32_t)v & 0xFFFF));
 }
 
-void loadid_jr3_config_default(loadid_jr3_config_t *cfg)
-{
+void loadid_jr3_config_default(loadid_jr3_config_t *cfg) {
     static const double defaults[LOADID_JR3_NUM_GROUPS] = {200.0, 12.0, 98.1, 1000.0};
     if (!cfg) {
         return;
@@ -70,8 +65,7 @@ void loadid_jr3_config_default(loadid_jr3_config_t *cfg)
     }
 }
 
-int loadid_jr3_config_check(const loadid_jr3_config_t *cfg)
-{
+int loadid_jr3_config_check(const loadid_jr3_config_t *cfg) {
     if (!cfg || cfg->base_id > LOADID_JR3_MAX_BASE_ID) {
         return -EINVAL;
     }
@@ -88,11 +82,9 @@ int loadid_jr3_config_check(const loadid_jr3_config_t *cfg)
 
 /* ---- Encoder ----------------------------------------------------------- */
 
-int loadid_jr3_encode(const loadid_jr3_config_t *cfg,
-                      const double value[LOADID_JR3_NUM_GROUPS][3],
+int loadid_jr3_encode(const loadid_jr3_config_t *cfg, const double value[LOADID_JR3_NUM_GROUPS][3],
                       uint8_t sequence, unsigned fault_groups, int64_t t_us,
-                      loadid_can_frame_t frames[LOADID_JR3_NUM_GROUPS])
-{
+                      loadid_can_frame_t frames[LOADID_JR3_NUM_GROUPS]) {
     if (!value || !frames || fault_groups > LOADID_JR3_ALL_GROUPS ||
         loadid_jr3_config_check(cfg) != 0) {
         return -EINVAL;
@@ -116,8 +108,8 @@ int loadid_jr3_encode(const loadid_jr3_config_t *cfg,
             /* x 16384 is exact; one rounding in the division, then round()
              * half away from zero. Compared as doubles before converting,
              * so +-Inf and huge values never reach an integer conversion. */
-            double c = round(value[g][k] * LOADID_JR3_COUNTS_PER_FULL_SCALE /
-                             cfg->full_scale[g][k]);
+            double c =
+                round(value[g][k] * LOADID_JR3_COUNTS_PER_FULL_SCALE / cfg->full_scale[g][k]);
             int16_t counts;
             if (c > 32767.0) {
                 counts = 32767;
@@ -142,9 +134,8 @@ int loadid_jr3_encode(const loadid_jr3_config_t *cfg,
     return saturated;
 }
 
-int loadid_jr3_encode_full_scale(uint32_t base_id, int group, const double fs[3],
-                                 int64_t t_us, loadid_can_frame_t *frame, double sent[3])
-{
+int loadid_jr3_encode_full_scale(uint32_t base_id, int group, const double fs[3], int64_t t_us,
+                                 loadid_can_frame_t *frame, double sent[3]) {
     if (!fs || !frame || base_id > LOADID_JR3_MAX_BASE_ID || group < 0 ||
         group >= LOADID_JR3_NUM_GROUPS) {
         return -EINVAL;
@@ -177,8 +168,7 @@ int loadid_jr3_encode_full_scale(uint32_t base_id, int group, const double fs[3]
 
 /* ---- Decoder ----------------------------------------------------------- */
 
-int loadid_jr3_decoder_create(const loadid_jr3_config_t *cfg, loadid_jr3_decoder_t **out)
-{
+int loadid_jr3_decoder_create(const loadid_jr3_config_t *cfg, loadid_jr3_decoder_t **out) {
     if (!out) {
         return -EINVAL;
     }
@@ -196,13 +186,11 @@ int loadid_jr3_decoder_create(const loadid_jr3_config_t *cfg, loadid_jr3_decoder
     return 0;
 }
 
-void loadid_jr3_decoder_destroy(loadid_jr3_decoder_t *dec)
-{
+void loadid_jr3_decoder_destroy(loadid_jr3_decoder_t *dec) {
     free(dec);
 }
 
-void loadid_jr3_decoder_reset(loadid_jr3_decoder_t *dec)
-{
+void loadid_jr3_decoder_reset(loadid_jr3_decoder_t *dec) {
     if (!dec) {
         return;
     }
@@ -215,8 +203,7 @@ void loadid_jr3_decoder_reset(loadid_jr3_decoder_t *dec)
     memset(&dec->st, 0, sizeof dec->st);
 }
 
-static int bad(loadid_jr3_decoder_t *dec, int64_t *counter, int code)
-{
+static int bad(loadid_jr3_decoder_t *dec, int64_t *counter, int code) {
     ++*counter;
     ++dec->st.frames_bad;
     return code;
@@ -224,8 +211,7 @@ static int bad(loadid_jr3_decoder_t *dec, int64_t *counter, int code)
 
 /* A valid-looking base+4 frame (DLC already checked). */
 static int feed_full_scale(loadid_jr3_decoder_t *dec, const loadid_can_frame_t *f,
-                           loadid_jr3_output_t *out)
-{
+                           loadid_jr3_output_t *out) {
     const uint8_t *d = f->data;
     if (d[0] >= LOADID_JR3_NUM_GROUPS || d[1] != 0) {
         return bad(dec, &dec->st.frames_malformed, LOADID_JR3_E_MALFORMED);
@@ -253,8 +239,7 @@ static int feed_full_scale(loadid_jr3_decoder_t *dec, const loadid_can_frame_t *
     return LOADID_JR3_FULL_SCALE;
 }
 
-static void begin(loadid_jr3_decoder_t *dec, uint8_t seq)
-{
+static void begin(loadid_jr3_decoder_t *dec, uint8_t seq) {
     if (dec->begun) {
         /* Numbers skipped between the last sample begun and this one;
          * uint8 arithmetic wraps, so 255 -> 0 is 0. */
@@ -270,8 +255,7 @@ static void begin(loadid_jr3_decoder_t *dec, uint8_t seq)
 }
 
 int loadid_jr3_decoder_feed(loadid_jr3_decoder_t *dec, const loadid_can_frame_t *frame,
-                            loadid_jr3_output_t *out)
-{
+                            loadid_jr3_output_t *out) {
     if (!dec || !frame || !out) {
         return -EINVAL;
     }
@@ -352,8 +336,7 @@ int loadid_jr3_decoder_feed(loadid_jr3_decoder_t *dec, const loadid_can_frame_t 
     return s->faulty ? LOADID_JR3_E_FAULT : LOADID_JR3_E_SATURATED;
 }
 
-int loadid_jr3_decoder_stats(const loadid_jr3_decoder_t *dec, loadid_jr3_stats_t *out)
-{
+int loadid_jr3_decoder_stats(const loadid_jr3_decoder_t *dec, loadid_jr3_stats_t *out) {
     if (!dec || !out) {
         return -EINVAL;
     }
@@ -362,8 +345,7 @@ int loadid_jr3_decoder_stats(const loadid_jr3_decoder_t *dec, loadid_jr3_stats_t
 }
 
 int loadid_jr3_decoder_full_scale(const loadid_jr3_decoder_t *dec,
-                                  double out[LOADID_JR3_NUM_GROUPS][3])
-{
+                                  double out[LOADID_JR3_NUM_GROUPS][3]) {
     if (!dec || !out) {
         return -EINVAL;
     }
@@ -371,28 +353,40 @@ int loadid_jr3_decoder_full_scale(const loadid_jr3_decoder_t *dec,
     return 0;
 }
 
-const char *loadid_jr3_strerror(int code)
-{
+const char *loadid_jr3_strerror(int code) {
     switch (code) {
-    case LOADID_JR3_NONE: return "no sample";
-    case LOADID_JR3_SAMPLE: return "a complete sample";
-    case LOADID_JR3_FULL_SCALE: return "a full scale changed (base+4)";
-    case LOADID_JR3_E_SATURATED: return "sample saturated (not usable)";
-    case LOADID_JR3_E_FAULT: return "sample with sensor fault (not usable)";
-    case LOADID_JR3_E_UNKNOWN_ID: return "CAN identifier not base..base+4 (or extended)";
-    case LOADID_JR3_E_DLC: return "CAN frame DLC is not 8";
-    case LOADID_JR3_E_MALFORMED: return "malformed full-scale frame (group > 3, byte 1 != 0 or zero full scale)";
-    case LOADID_JR3_E_RESERVED: return "reserved status bits set";
-    case LOADID_JR3_E_DUPLICATE: return "duplicate frame for a sequence number";
-    case LOADID_JR3_E_RANGE: return "full scale out of the range of the base+4 frame";
-    case -EINVAL: return "invalid argument";
-    case -ENOMEM: return "out of memory";
-    default: return code < 0 ? "unknown error" : "unknown result";
+        case LOADID_JR3_NONE:
+            return "no sample";
+        case LOADID_JR3_SAMPLE:
+            return "a complete sample";
+        case LOADID_JR3_FULL_SCALE:
+            return "a full scale changed (base+4)";
+        case LOADID_JR3_E_SATURATED:
+            return "sample saturated (not usable)";
+        case LOADID_JR3_E_FAULT:
+            return "sample with sensor fault (not usable)";
+        case LOADID_JR3_E_UNKNOWN_ID:
+            return "CAN identifier not base..base+4 (or extended)";
+        case LOADID_JR3_E_DLC:
+            return "CAN frame DLC is not 8";
+        case LOADID_JR3_E_MALFORMED:
+            return "malformed full-scale frame (group > 3, byte 1 != 0 or zero full scale)";
+        case LOADID_JR3_E_RESERVED:
+            return "reserved status bits set";
+        case LOADID_JR3_E_DUPLICATE:
+            return "duplicate frame for a sequence number";
+        case LOADID_JR3_E_RANGE:
+            return "full scale out of the range of the base+4 frame";
+        case -EINVAL:
+            return "invalid argument";
+        case -ENOMEM:
+            return "out of memory";
+        default:
+            return code < 0 ? "unknown error" : "unknown result";
     }
 }
 
-const char *loadid_jr3_group_name(int group)
-{
+const char *loadid_jr3_group_name(int group) {
     static const char *const names[LOADID_JR3_NUM_GROUPS] = {"force", "moment", "linear",
                                                              "angular"};
     return group >= 0 && group < LOADID_JR3_NUM_GROUPS ? names[group] : "?";

@@ -12,24 +12,24 @@
 
 struct loadid_eventlog {
     FILE *f;
-    int64_t start;            /* f's position at open: where the log begins */
-    int64_t pos;              /* f's position as far as this reader knows */
+    int64_t start; /* f's position at open: where the log begins */
+    int64_t pos;   /* f's position as far as this reader knows */
     /* The last read when it was of 4 bytes or fewer (the next event's sync
      * word, read to check an event's length), while f is still just past
      * it: reading the next header from there needs no seek back. */
     int64_t held_off;
     int held_len;
     uint8_t held[4];
-    int64_t next;             /* where the next event should begin */
+    int64_t next; /* where the next event should begin */
     size_t data_max;
-    int error;                /* sticky: LOADID_EVENTLOG_E_NOT_LOG or -EIO */
+    int error; /* sticky: LOADID_EVENTLOG_E_NOT_LOG or -EIO */
     int ended;
     char error_text[LOADID_EVENTLOG_PROBLEM_MAX + 64];
     loadid_eventlog_stats_t st;
     char channel[LOADID_EVENTLOG_CHANNEL_MAX + 1]; /* the event's */
     char probe[LOADID_EVENTLOG_CHANNEL_MAX + 1];   /* a candidate's, while searching */
     uint8_t scan[SCAN_CHUNK];
-    uint8_t data[];           /* data_max bytes */
+    uint8_t data[]; /* data_max bytes */
 };
 
 typedef struct {
@@ -39,14 +39,14 @@ typedef struct {
 
 /* What header_at found. */
 enum {
-    H_OK,            /* a plausible header, its channel read */
-    H_SHORT,         /* the file ends inside the header or the channel; what
+    H_OK,          /* a plausible header, its channel read */
+    H_SHORT,       /* the file ends inside the header or the channel; what
                         is there is plausible */
-    H_SYNC,          /* no sync word */
-    H_CHANNEL_LEN,   /* channel length outside 1..LOADID_EVENTLOG_CHANNEL_MAX */
-    H_DATA_LEN,      /* negative data length */
-    H_CHANNEL,       /* a channel byte that is not printable ASCII */
-    H_IO             /* read error */
+    H_SYNC,        /* no sync word */
+    H_CHANNEL_LEN, /* channel length outside 1..LOADID_EVENTLOG_CHANNEL_MAX */
+    H_DATA_LEN,    /* negative data length */
+    H_CHANNEL,     /* a channel byte that is not printable ASCII */
+    H_IO           /* read error */
 };
 
 static uint32_t be32(const uint8_t *b) {
@@ -165,8 +165,8 @@ static void problem(loadid_eventlog_t *r, const char *fmt, ...) {
 
 static int fail_io(loadid_eventlog_t *r, int64_t off) {
     r->error = -EIO;
-    snprintf(r->error_text, sizeof r->error_text, "read error near byte %lld: %s",
-             (long long)off, strerror(errno ? errno : EIO));
+    snprintf(r->error_text, sizeof r->error_text, "read error near byte %lld: %s", (long long)off,
+             strerror(errno ? errno : EIO));
     return r->error;
 }
 
@@ -248,7 +248,9 @@ int loadid_eventlog_open(FILE *f, size_t data_max, loadid_eventlog_t **out) {
     return 0;
 }
 
-void loadid_eventlog_close(loadid_eventlog_t *r) { free(r); }
+void loadid_eventlog_close(loadid_eventlog_t *r) {
+    free(r);
+}
 
 int loadid_eventlog_next(loadid_eventlog_t *r, loadid_eventlog_event_t *ev) {
     if (r->error) return r->error;
@@ -302,8 +304,9 @@ int loadid_eventlog_next(loadid_eventlog_t *r, loadid_eventlog_event_t *ev) {
             if (inside >= 0) {
                 r->st.damaged++;
                 r->st.skipped_bytes += inside - off;
-                problem(r, "byte %lld: data length %d in the event header runs %s; %lld bytes "
-                           "skipped to the next event at byte %lld",
+                problem(r,
+                        "byte %lld: data length %d in the event header runs %s; %lld bytes "
+                        "skipped to the next event at byte %lld",
                         (long long)off, (int)h.data_len,
                         end > r->st.size ? "past the end of the file" : "over the next event",
                         (long long)(inside - off), (long long)inside);
@@ -342,9 +345,13 @@ const char *loadid_eventlog_error(const loadid_eventlog_t *r) {
 
 const char *loadid_eventlog_strerror(int code) {
     switch (code) {
-        case 0: return "success";
-        case LOADID_EVENTLOG_E_NOT_LOG: return "not an LCM log";
-        case LOADID_EVENTLOG_E_SEEK: return "the LCM log is not seekable";
-        default: return code < 0 && code > -4096 ? strerror(-code) : "unknown error";
+        case 0:
+            return "success";
+        case LOADID_EVENTLOG_E_NOT_LOG:
+            return "not an LCM log";
+        case LOADID_EVENTLOG_E_SEEK:
+            return "the LCM log is not seekable";
+        default:
+            return code < 0 && code > -4096 ? strerror(-code) : "unknown error";
     }
 }

@@ -59,8 +59,8 @@ int loadid_lcm_udpm_parse_url(const char *url, loadid_lcm_udpm_url_t *out) {
 int loadid_lcm_udpm_parse(const uint8_t *dgram, size_t n, const char **channel,
                           const uint8_t **payload, size_t *len) {
     if (n < 4) return -EBADMSG;
-    const uint32_t magic = (uint32_t)dgram[0] << 24 | (uint32_t)dgram[1] << 16 |
-                           (uint32_t)dgram[2] << 8 | dgram[3];
+    const uint32_t magic =
+        (uint32_t)dgram[0] << 24 | (uint32_t)dgram[1] << 16 | (uint32_t)dgram[2] << 8 | dgram[3];
     if (magic == MAGIC_LONG) return 1;
     if (magic != MAGIC_SHORT || n < 9) return -EBADMSG; /* header and at least a NUL */
     const uint8_t *name = dgram + 8;
@@ -94,14 +94,14 @@ int loadid_lcm_udpm_open(const loadid_lcm_udpm_url_t *url, char *err, size_t err
         if (url->recv_buf_size <= 0 &&
             setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &burst, sizeof burst) < 0)
             (void)setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &burst, sizeof burst);
-        if ((what = "SO_REUSEADDR",
-             setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one)) < 0 ||
+        if ((what = "SO_REUSEADDR", setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one)) <
+                0 ||
             (what = "bind", bind(fd, (struct sockaddr *)&sa, sizeof sa)) < 0 ||
             (what = "IP_ADD_MEMBERSHIP (a multicast route?)",
              setsockopt(fd, IPPROTO_IP, IP_ADD_MEMBERSHIP, &mreq, sizeof mreq)) < 0 ||
-            (what = "SO_RCVBUF", url->recv_buf_size > 0 &&
-                                     setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &url->recv_buf_size,
-                                                sizeof url->recv_buf_size) < 0)) {
+            (what = "SO_RCVBUF",
+             url->recv_buf_size > 0 && setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &url->recv_buf_size,
+                                                  sizeof url->recv_buf_size) < 0)) {
             const int e = errno;
             close(fd);
             fd = -1;
@@ -135,8 +135,8 @@ int loadid_lcm_udpm_read(int fd, uint8_t *buf, size_t cap) {
     return loadid_lcm_udpm_read_from(fd, buf, cap, NULL);
 }
 
-int loadid_lcm_udpm_open_tx(const loadid_lcm_udpm_url_t *url, loadid_lcm_udpm_tx_t *tx,
-                            char *err, size_t errlen) {
+int loadid_lcm_udpm_open_tx(const loadid_lcm_udpm_url_t *url, loadid_lcm_udpm_tx_t *tx, char *err,
+                            size_t errlen) {
     memset(tx, 0, sizeof *tx);
     memcpy(tx->group, url->group, 4);
     tx->port = url->port;
@@ -168,12 +168,16 @@ int loadid_lcm_udpm_send(loadid_lcm_udpm_tx_t *tx, const char *channel, const ui
     if (nch == 0 || nch > LOADID_LCM_CHANNEL_MAX) return -EINVAL;
     if (nch + 1 + len > LOADID_LCM_SHORT_MAX) return -EMSGSIZE;
     const uint32_t seq = tx->seqno++;
-    const uint8_t hdr[8] = {0x4c, 0x43, 0x30, 0x32, /* "LC02" */
-                            (uint8_t)(seq >> 24), (uint8_t)(seq >> 16), (uint8_t)(seq >> 8),
+    const uint8_t hdr[8] = {0x4c,
+                            0x43,
+                            0x30,
+                            0x32, /* "LC02" */
+                            (uint8_t)(seq >> 24),
+                            (uint8_t)(seq >> 16),
+                            (uint8_t)(seq >> 8),
                             (uint8_t)seq};
-    struct iovec iov[3] = {{(void *)hdr, sizeof hdr},
-                           {(void *)channel, nch + 1},
-                           {(void *)data, len}};
+    struct iovec iov[3] = {
+        {(void *)hdr, sizeof hdr}, {(void *)channel, nch + 1}, {(void *)data, len}};
     struct sockaddr_in sa;
     memset(&sa, 0, sizeof sa);
     sa.sin_family = AF_INET;

@@ -96,16 +96,11 @@ static const member_t kStatus[] = {
     {"loop_us_max", "double", NULL, 0},
 };
 static const member_t kLoadModel[] = {
-    {"utime", "int64_t", NULL, 0},
-    {"method", "int8_t", NULL, 0},
-    {"load_name", "string", NULL, 0},
-    {"identified", "int8_t", NULL, 0},
-    {"projected", "boolean", NULL, 0},
-    {"phi", "double", "10", 0},
-    {"phi_std", "double", "10", 0},
-    {"mass", "double", NULL, 0},
-    {"com", "double", "3", 0},
-    {"inertia_com", "double", "6", 0},
+    {"utime", "int64_t", NULL, 0},     {"method", "int8_t", NULL, 0},
+    {"load_name", "string", NULL, 0},  {"identified", "int8_t", NULL, 0},
+    {"projected", "boolean", NULL, 0}, {"phi", "double", "10", 0},
+    {"phi_std", "double", "10", 0},    {"mass", "double", NULL, 0},
+    {"com", "double", "3", 0},         {"inertia_com", "double", "6", 0},
 };
 
 #define N(a) ((int)(sizeof(a) / sizeof((a)[0])))
@@ -140,7 +135,9 @@ static void put_u64(wr_t *w, uint64_t v) {
     }
     for (int i = 0; i < 8; ++i) w->p[w->n++] = (uint8_t)(v >> (56 - 8 * i));
 }
-static void put_i64(wr_t *w, int64_t v) { put_u64(w, (uint64_t)v); }
+static void put_i64(wr_t *w, int64_t v) {
+    put_u64(w, (uint64_t)v);
+}
 static void put_i32(wr_t *w, int32_t v) {
     if (w->cap - w->n < 4) {
         w->full = 1;
@@ -177,7 +174,9 @@ static int put_string(wr_t *w, const char *s, size_t room) {
     return 0;
 }
 
-static int finish(const wr_t *w) { return w->full ? LOADID_LCM_ENOSPC : (int)w->n; }
+static int finish(const wr_t *w) {
+    return w->full ? LOADID_LCM_ENOSPC : (int)w->n;
+}
 
 static wr_t writer(loadid_lcm_type_t t, uint8_t *buf, size_t cap) {
     wr_t w = {buf, buf ? cap : 0, 0, 0};
@@ -265,7 +264,7 @@ int loadid_lcm_encode_load_model(const loadid_lcm_load_model_t *m, uint8_t *buf,
 typedef struct {
     const uint8_t *p;
     size_t len, n;
-    int err;       /* first error, or 0 */
+    int err; /* first error, or 0 */
     int nonfinite;
 } rd_t;
 
@@ -287,14 +286,18 @@ static uint64_t get_u64(rd_t *r) {
            (uint64_t)b[3] << 32 | (uint64_t)b[4] << 24 | (uint64_t)b[5] << 16 |
            (uint64_t)b[6] << 8 | (uint64_t)b[7];
 }
-static int64_t get_i64(rd_t *r) { return (int64_t)get_u64(r); }
+static int64_t get_i64(rd_t *r) {
+    return (int64_t)get_u64(r);
+}
 static int32_t get_i32(rd_t *r) {
     if (!have(r, 4)) return 0;
     const uint8_t *b = r->p + r->n;
     r->n += 4;
     return (int32_t)((uint32_t)b[0] << 24 | (uint32_t)b[1] << 16 | (uint32_t)b[2] << 8 | b[3]);
 }
-static int8_t get_i8(rd_t *r) { return have(r, 1) ? (int8_t)r->p[r->n++] : 0; }
+static int8_t get_i8(rd_t *r) {
+    return have(r, 1) ? (int8_t)r->p[r->n++] : 0;
+}
 static void get_f64s(rd_t *r, double *v, int k) {
     for (int i = 0; i < k; ++i) {
         const uint64_t u = get_u64(r);
@@ -418,16 +421,26 @@ int loadid_lcm_decode_load_model(const uint8_t *buf, size_t len, loadid_lcm_load
 
 const char *loadid_lcm_strerror(int code) {
     switch (code) {
-        case 0: return "ok";
-        case LOADID_LCM_NONFINITE: return "decoded; a value is NaN or infinite";
-        case LOADID_LCM_ESHORT: return "message truncated";
-        case LOADID_LCM_ELONG: return "bytes after the message";
-        case LOADID_LCM_EFINGERPRINT: return "fingerprint of another type";
-        case LOADID_LCM_ECOUNT: return "num_joints out of range";
-        case LOADID_LCM_ESTRING: return "bad string (length, NUL terminator, NUL inside)";
-        case LOADID_LCM_ENOSPC: return "buffer too small";
-        case LOADID_LCM_EINVAL: return "field out of range";
-        default: return "unknown LCM wire error";
+        case 0:
+            return "ok";
+        case LOADID_LCM_NONFINITE:
+            return "decoded; a value is NaN or infinite";
+        case LOADID_LCM_ESHORT:
+            return "message truncated";
+        case LOADID_LCM_ELONG:
+            return "bytes after the message";
+        case LOADID_LCM_EFINGERPRINT:
+            return "fingerprint of another type";
+        case LOADID_LCM_ECOUNT:
+            return "num_joints out of range";
+        case LOADID_LCM_ESTRING:
+            return "bad string (length, NUL terminator, NUL inside)";
+        case LOADID_LCM_ENOSPC:
+            return "buffer too small";
+        case LOADID_LCM_EINVAL:
+            return "field out of range";
+        default:
+            return "unknown LCM wire error";
     }
 }
 

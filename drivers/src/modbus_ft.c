@@ -8,8 +8,7 @@
 #include <math.h>
 #include <string.h>
 
-static bool fs_ok(const double fs[3])
-{
+static bool fs_ok(const double fs[3]) {
     for (int i = 0; i < 3; ++i) {
         if (!isfinite(fs[i]) || !(fs[i] > 0)) {
             return false;
@@ -19,14 +18,12 @@ static bool fs_ok(const double fs[3])
 }
 
 /* A register as int16 without implementation-defined conversion. */
-static int16_t as_i16(uint16_t u)
-{
+static int16_t as_i16(uint16_t u) {
     return u >= 0x8000u ? (int16_t)((int32_t)u - 65536) : (int16_t)u;
 }
 
 int loadid_modbus_ft_decoder_init(loadid_modbus_ft_decoder_t *dec, const double fs_force[3],
-                                  const double fs_moment[3])
-{
+                                  const double fs_moment[3]) {
     if (!dec || !fs_force || !fs_moment || !fs_ok(fs_force) || !fs_ok(fs_moment)) {
         return -EINVAL;
     }
@@ -38,8 +35,7 @@ int loadid_modbus_ft_decoder_init(loadid_modbus_ft_decoder_t *dec, const double 
     return 0;
 }
 
-void loadid_modbus_ft_decoder_restart(loadid_modbus_ft_decoder_t *dec)
-{
+void loadid_modbus_ft_decoder_restart(loadid_modbus_ft_decoder_t *dec) {
     if (dec) {
         dec->begun = false;
     }
@@ -47,8 +43,7 @@ void loadid_modbus_ft_decoder_restart(loadid_modbus_ft_decoder_t *dec)
 
 int loadid_modbus_ft_decode(loadid_modbus_ft_decoder_t *dec,
                             const uint16_t regs[LOADID_MODBUS_FT_INPUT_COUNT], int64_t t_us,
-                            loadid_modbus_ft_sample_t *out)
-{
+                            loadid_modbus_ft_sample_t *out) {
     if (!dec || !regs || !out) {
         return -EINVAL;
     }
@@ -97,8 +92,7 @@ int loadid_modbus_ft_decode(loadid_modbus_ft_decoder_t *dec,
 }
 
 int loadid_modbus_ft_decode_full_scale(loadid_modbus_ft_decoder_t *dec,
-                                       const uint16_t regs[LOADID_MODBUS_FT_HOLDING_COUNT])
-{
+                                       const uint16_t regs[LOADID_MODBUS_FT_HOLDING_COUNT]) {
     if (!dec || !regs) {
         return -EINVAL;
     }
@@ -123,8 +117,7 @@ int loadid_modbus_ft_decode_full_scale(loadid_modbus_ft_decoder_t *dec,
  * the limit is that count, not saturated, so that every decoded sample
  * encodes back to its own registers. Compared as doubles before the
  * conversion, so +-Inf and huge values never reach it. */
-static uint16_t to_counts(double v, double fs, bool *sat, bool *bad)
-{
+static uint16_t to_counts(double v, double fs, bool *sat, bool *bad) {
     if (isnan(v)) {
         *bad = true;
         return 0;
@@ -145,8 +138,7 @@ static uint16_t to_counts(double v, double fs, bool *sat, bool *bad)
 
 int loadid_modbus_ft_encode(const double fs_force[3], const double fs_moment[3],
                             const double force[3], const double torque[3], bool fault,
-                            uint16_t counter, uint16_t regs[LOADID_MODBUS_FT_INPUT_COUNT])
-{
+                            uint16_t counter, uint16_t regs[LOADID_MODBUS_FT_INPUT_COUNT]) {
     if (!fs_force || !fs_moment || !force || !torque || !regs || !fs_ok(fs_force) ||
         !fs_ok(fs_moment)) {
         return -EINVAL;
@@ -156,15 +148,15 @@ int loadid_modbus_ft_encode(const double fs_force[3], const double fs_moment[3],
         regs[k] = to_counts(force[k], fs_force[k], &sat, &bad);
         regs[3 + k] = to_counts(torque[k], fs_moment[k], &sat, &bad);
     }
-    regs[LOADID_MODBUS_FT_REG_STATUS] = (uint16_t)((sat ? LOADID_MODBUS_FT_STATUS_SATURATED : 0u) |
-                                                   (fault || bad ? LOADID_MODBUS_FT_STATUS_FAULT : 0u));
+    regs[LOADID_MODBUS_FT_REG_STATUS] =
+        (uint16_t)((sat ? LOADID_MODBUS_FT_STATUS_SATURATED : 0u) |
+                   (fault || bad ? LOADID_MODBUS_FT_STATUS_FAULT : 0u));
     regs[LOADID_MODBUS_FT_REG_COUNTER] = counter;
     return 0;
 }
 
 int loadid_modbus_ft_encode_full_scale(const double fs_force[3], const double fs_moment[3],
-                                       uint16_t regs[LOADID_MODBUS_FT_HOLDING_COUNT])
-{
+                                       uint16_t regs[LOADID_MODBUS_FT_HOLDING_COUNT]) {
     if (!fs_force || !fs_moment || !regs) {
         return -EINVAL;
     }
@@ -183,42 +175,55 @@ int loadid_modbus_ft_encode_full_scale(const double fs_force[3], const double fs
     return 0;
 }
 
-const char *loadid_modbus_ft_strerror(int code)
-{
+const char *loadid_modbus_ft_strerror(int code) {
     switch (code) {
-    case 0: return "ok";
-    case LOADID_MODBUS_FT_SAMPLE: return "a new sample";
-    case LOADID_MODBUS_FT_FULL_SCALE: return "full scales read from the sensor";
-    case LOADID_MODBUS_FT_E_SATURATED: return "sample saturated (not usable)";
-    case LOADID_MODBUS_FT_E_FAULT: return "sample with sensor fault (not usable)";
-    case LOADID_MODBUS_FT_E_STALE: return "stale sample (counter unchanged)";
-    case LOADID_MODBUS_FT_E_MALFORMED: return "malformed registers (reserved status bits or zero full scale)";
-    case LOADID_MODBUS_FT_E_TIMEOUT: return "Modbus response timeout";
-    case LOADID_MODBUS_FT_E_BAD_FRAME: return "bad Modbus frame (CRC, slave or data)";
-    case LOADID_MODBUS_FT_E_EXCEPTION: return "Modbus exception response";
-    case LOADID_MODBUS_FT_E_GONE: return "serial device vanished or failed (closed; reopen)";
-    case LOADID_MODBUS_FT_E_CLOSED: return "serial device not open";
-    case -EINVAL: return "invalid argument";
-    case -ENOMEM: return "out of memory";
-    case -ERANGE: return "value out of range";
-    default:
-        if (code < 0 && code > -4096) {
-            return strerror(-code);
-        }
-        return code < 0 ? "unknown error" : "unknown result";
+        case 0:
+            return "ok";
+        case LOADID_MODBUS_FT_SAMPLE:
+            return "a new sample";
+        case LOADID_MODBUS_FT_FULL_SCALE:
+            return "full scales read from the sensor";
+        case LOADID_MODBUS_FT_E_SATURATED:
+            return "sample saturated (not usable)";
+        case LOADID_MODBUS_FT_E_FAULT:
+            return "sample with sensor fault (not usable)";
+        case LOADID_MODBUS_FT_E_STALE:
+            return "stale sample (counter unchanged)";
+        case LOADID_MODBUS_FT_E_MALFORMED:
+            return "malformed registers (reserved status bits or zero full scale)";
+        case LOADID_MODBUS_FT_E_TIMEOUT:
+            return "Modbus response timeout";
+        case LOADID_MODBUS_FT_E_BAD_FRAME:
+            return "bad Modbus frame (CRC, slave or data)";
+        case LOADID_MODBUS_FT_E_EXCEPTION:
+            return "Modbus exception response";
+        case LOADID_MODBUS_FT_E_GONE:
+            return "serial device vanished or failed (closed; reopen)";
+        case LOADID_MODBUS_FT_E_CLOSED:
+            return "serial device not open";
+        case -EINVAL:
+            return "invalid argument";
+        case -ENOMEM:
+            return "out of memory";
+        case -ERANGE:
+            return "value out of range";
+        default:
+            if (code < 0 && code > -4096) {
+                return strerror(-code);
+            }
+            return code < 0 ? "unknown error" : "unknown result";
     }
 }
 
 /* The speeds libmodbus 3.1's RTU backend maps onto termios B* constants on
  * Linux (modbus-rtu.c, _modbus_rtu_connect); any other it replaces with
  * 9600 without an error, so they are refused here. */
-static const int kBauds[] = {110,    300,     600,     1200,    2400,    4800,    9600,
-                             19200,  38400,   57600,   115200,  230400,  460800,  500000,
-                             576000, 921600,  1000000, 1152000, 1500000, 2000000, 2500000,
-                             3000000, 3500000, 4000000};
+static const int kBauds[] = {110,     300,     600,     1200,    2400,    4800,
+                             9600,    19200,   38400,   57600,   115200,  230400,
+                             460800,  500000,  576000,  921600,  1000000, 1152000,
+                             1500000, 2000000, 2500000, 3000000, 3500000, 4000000};
 
-bool loadid_modbus_ft_baud_supported(int baud)
-{
+bool loadid_modbus_ft_baud_supported(int baud) {
     for (size_t i = 0; i < sizeof kBauds / sizeof kBauds[0]; ++i) {
         if (kBauds[i] == baud) {
             return true;

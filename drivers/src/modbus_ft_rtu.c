@@ -17,12 +17,11 @@ struct loadid_modbus_ft {
     loadid_modbus_ft_config_t cfg;
     modbus_t *ctx;
     bool open;
-    loadid_modbus_ft_decoder_t dec;  /* holds every counter */
+    loadid_modbus_ft_decoder_t dec; /* holds every counter */
     char last_error[LOADID_MODBUS_FT_DEVICE_MAX + 128];
 };
 
-void loadid_modbus_ft_config_default(loadid_modbus_ft_config_t *cfg)
-{
+void loadid_modbus_ft_config_default(loadid_modbus_ft_config_t *cfg) {
     if (!cfg) {
         return;
     }
@@ -40,8 +39,7 @@ void loadid_modbus_ft_config_default(loadid_modbus_ft_config_t *cfg)
     }
 }
 
-int loadid_modbus_ft_config_check(const loadid_modbus_ft_config_t *cfg)
-{
+int loadid_modbus_ft_config_check(const loadid_modbus_ft_config_t *cfg) {
     loadid_modbus_ft_decoder_t probe;
     if (!cfg || !cfg->device[0] || memchr(cfg->device, 0, sizeof cfg->device) == NULL ||
         !loadid_modbus_ft_baud_supported(cfg->baud) ||
@@ -54,8 +52,7 @@ int loadid_modbus_ft_config_check(const loadid_modbus_ft_config_t *cfg)
     return 0;
 }
 
-int loadid_modbus_ft_create(const loadid_modbus_ft_config_t *cfg, loadid_modbus_ft_t **out)
-{
+int loadid_modbus_ft_create(const loadid_modbus_ft_config_t *cfg, loadid_modbus_ft_t **out) {
     if (!out || loadid_modbus_ft_config_check(cfg) != 0) {
         return -EINVAL;
     }
@@ -84,8 +81,7 @@ int loadid_modbus_ft_create(const loadid_modbus_ft_config_t *cfg, loadid_modbus_
     return 0;
 }
 
-void loadid_modbus_ft_destroy(loadid_modbus_ft_t *ft)
-{
+void loadid_modbus_ft_destroy(loadid_modbus_ft_t *ft) {
     if (!ft) {
         return;
     }
@@ -94,28 +90,24 @@ void loadid_modbus_ft_destroy(loadid_modbus_ft_t *ft)
     free(ft);
 }
 
-bool loadid_modbus_ft_is_open(const loadid_modbus_ft_t *ft)
-{
+bool loadid_modbus_ft_is_open(const loadid_modbus_ft_t *ft) {
     return ft && ft->open;
 }
 
-void loadid_modbus_ft_close(loadid_modbus_ft_t *ft)
-{
+void loadid_modbus_ft_close(loadid_modbus_ft_t *ft) {
     if (ft && ft->open) {
         modbus_close(ft->ctx);
         ft->open = false;
     }
 }
 
-static int64_t now_us(void)
-{
+static int64_t now_us(void) {
     struct timespec ts;
     clock_gettime(CLOCK_REALTIME, &ts);
     return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
 }
 
-static void set_error(loadid_modbus_ft_t *ft, const char *what, int e)
-{
+static void set_error(loadid_modbus_ft_t *ft, const char *what, int e) {
     snprintf(ft->last_error, sizeof ft->last_error, "%s: %s: %s", ft->cfg.device, what,
              modbus_strerror(e));
 }
@@ -125,8 +117,7 @@ static void set_error(loadid_modbus_ft_t *ft, const char *what, int e)
  * transaction starts clean; anything not a Modbus-level fault means the
  * device itself failed (a pty whose master closed gives EIO on write and
  * ECONNRESET on read; a USB adapter unplugged gives EIO or ENXIO). */
-static int classify(loadid_modbus_ft_t *ft, const char *what, int e)
-{
+static int classify(loadid_modbus_ft_t *ft, const char *what, int e) {
     loadid_modbus_ft_stats_t *st = &ft->dec.st;
     set_error(ft, what, e);
     if (e == ETIMEDOUT) {
@@ -138,8 +129,8 @@ static int classify(loadid_modbus_ft_t *ft, const char *what, int e)
         ++st->exceptions;
         return LOADID_MODBUS_FT_E_EXCEPTION;
     }
-    if (e == EMBBADCRC || e == EMBBADDATA || e == EMBBADEXC || e == EMBUNKEXC ||
-        e == EMBMDATA || e == EMBBADSLAVE) {
+    if (e == EMBBADCRC || e == EMBBADDATA || e == EMBBADEXC || e == EMBUNKEXC || e == EMBMDATA ||
+        e == EMBBADSLAVE) {
         ++st->bad_frames;
         st->crc_errors += e == EMBBADCRC;
         modbus_flush(ft->ctx);
@@ -151,8 +142,7 @@ static int classify(loadid_modbus_ft_t *ft, const char *what, int e)
     return LOADID_MODBUS_FT_E_GONE;
 }
 
-int loadid_modbus_ft_open(loadid_modbus_ft_t *ft)
-{
+int loadid_modbus_ft_open(loadid_modbus_ft_t *ft) {
     if (!ft) {
         return -EINVAL;
     }
@@ -195,8 +185,7 @@ int loadid_modbus_ft_open(loadid_modbus_ft_t *ft)
     return rc;
 }
 
-int loadid_modbus_ft_read(loadid_modbus_ft_t *ft, loadid_modbus_ft_sample_t *out)
-{
+int loadid_modbus_ft_read(loadid_modbus_ft_t *ft, loadid_modbus_ft_sample_t *out) {
     if (!ft || !out) {
         return -EINVAL;
     }
@@ -215,8 +204,7 @@ int loadid_modbus_ft_read(loadid_modbus_ft_t *ft, loadid_modbus_ft_sample_t *out
     return loadid_modbus_ft_decode(&ft->dec, regs, t, out);
 }
 
-int loadid_modbus_ft_stats(const loadid_modbus_ft_t *ft, loadid_modbus_ft_stats_t *out)
-{
+int loadid_modbus_ft_stats(const loadid_modbus_ft_t *ft, loadid_modbus_ft_stats_t *out) {
     if (!ft || !out) {
         return -EINVAL;
     }
@@ -224,8 +212,7 @@ int loadid_modbus_ft_stats(const loadid_modbus_ft_t *ft, loadid_modbus_ft_stats_
     return 0;
 }
 
-int loadid_modbus_ft_full_scale(const loadid_modbus_ft_t *ft, double force[3], double moment[3])
-{
+int loadid_modbus_ft_full_scale(const loadid_modbus_ft_t *ft, double force[3], double moment[3]) {
     if (!ft || !force || !moment) {
         return -EINVAL;
     }
@@ -234,7 +221,6 @@ int loadid_modbus_ft_full_scale(const loadid_modbus_ft_t *ft, double force[3], d
     return 0;
 }
 
-const char *loadid_modbus_ft_last_error(const loadid_modbus_ft_t *ft)
-{
+const char *loadid_modbus_ft_last_error(const loadid_modbus_ft_t *ft) {
     return ft ? ft->last_error : "";
 }

@@ -19,15 +19,14 @@ struct loadid_modbus_ft_server {
     modbus_mapping_t *map;
     int fd;
     int nb_input, nb_holding;
-    pthread_mutex_t lock;       /* map, mode, stats, hook */
+    pthread_mutex_t lock; /* map, mode, stats, hook */
     int mode;
     loadid_modbus_ft_server_hook_fn hook;
     void *hook_ctx;
     loadid_modbus_ft_server_stats_t st;
 };
 
-uint16_t loadid_modbus_crc16(const uint8_t *p, int n)
-{
+uint16_t loadid_modbus_crc16(const uint8_t *p, int n) {
     uint16_t crc = 0xFFFFu;
     for (int i = 0; i < n; ++i) {
         crc ^= p[i];
@@ -39,8 +38,7 @@ uint16_t loadid_modbus_crc16(const uint8_t *p, int n)
 }
 
 int loadid_modbus_ft_server_create(int fd, int slave_id, int nb_input, int nb_holding,
-                                   loadid_modbus_ft_server_t **out)
-{
+                                   loadid_modbus_ft_server_t **out) {
     if (fd < 0 || !out || slave_id < 1 || slave_id > 247 || nb_input < 0 || nb_holding < 0 ||
         nb_input > 125 || nb_holding > 125) {
         return -EINVAL;
@@ -66,8 +64,7 @@ int loadid_modbus_ft_server_create(int fd, int slave_id, int nb_input, int nb_ho
     return 0;
 }
 
-void loadid_modbus_ft_server_destroy(loadid_modbus_ft_server_t *s)
-{
+void loadid_modbus_ft_server_destroy(loadid_modbus_ft_server_t *s) {
     if (!s) {
         return;
     }
@@ -78,8 +75,7 @@ void loadid_modbus_ft_server_destroy(loadid_modbus_ft_server_t *s)
 }
 
 void loadid_modbus_ft_server_set_input(loadid_modbus_ft_server_t *s,
-                                       const uint16_t regs[LOADID_MODBUS_FT_INPUT_COUNT])
-{
+                                       const uint16_t regs[LOADID_MODBUS_FT_INPUT_COUNT]) {
     pthread_mutex_lock(&s->lock);
     for (int i = 0; i < LOADID_MODBUS_FT_INPUT_COUNT && i < s->nb_input; ++i) {
         s->map->tab_input_registers[i] = regs[i];
@@ -88,8 +84,7 @@ void loadid_modbus_ft_server_set_input(loadid_modbus_ft_server_t *s,
 }
 
 void loadid_modbus_ft_server_set_holding(loadid_modbus_ft_server_t *s,
-                                         const uint16_t regs[LOADID_MODBUS_FT_HOLDING_COUNT])
-{
+                                         const uint16_t regs[LOADID_MODBUS_FT_HOLDING_COUNT]) {
     pthread_mutex_lock(&s->lock);
     for (int i = 0; i < LOADID_MODBUS_FT_HOLDING_COUNT && i < s->nb_holding; ++i) {
         s->map->tab_registers[i] = regs[i];
@@ -97,16 +92,14 @@ void loadid_modbus_ft_server_set_holding(loadid_modbus_ft_server_t *s,
     pthread_mutex_unlock(&s->lock);
 }
 
-void loadid_modbus_ft_server_set_mode(loadid_modbus_ft_server_t *s, int mode)
-{
+void loadid_modbus_ft_server_set_mode(loadid_modbus_ft_server_t *s, int mode) {
     pthread_mutex_lock(&s->lock);
     s->mode = mode;
     pthread_mutex_unlock(&s->lock);
 }
 
 void loadid_modbus_ft_server_set_hook(loadid_modbus_ft_server_t *s,
-                                      loadid_modbus_ft_server_hook_fn fn, void *ctx)
-{
+                                      loadid_modbus_ft_server_hook_fn fn, void *ctx) {
     pthread_mutex_lock(&s->lock);
     s->hook = fn;
     s->hook_ctx = ctx;
@@ -115,8 +108,7 @@ void loadid_modbus_ft_server_set_hook(loadid_modbus_ft_server_t *s,
 
 /* The answer to "read input registers addr, qty" with its CRC inverted.
  * Lock held. */
-static int write_bad_crc(loadid_modbus_ft_server_t *s, const uint8_t *req)
-{
+static int write_bad_crc(loadid_modbus_ft_server_t *s, const uint8_t *req) {
     const int addr = (req[2] << 8) | req[3];
     const int qty = (req[4] << 8) | req[5];
     uint8_t rsp[3 + 2 * 125 + 2];
@@ -139,8 +131,7 @@ static int write_bad_crc(loadid_modbus_ft_server_t *s, const uint8_t *req)
     return write(s->fd, rsp, (size_t)n + 2) == n + 2 ? 0 : -errno;
 }
 
-int loadid_modbus_ft_server_poll(loadid_modbus_ft_server_t *s, int timeout_ms)
-{
+int loadid_modbus_ft_server_poll(loadid_modbus_ft_server_t *s, int timeout_ms) {
     struct pollfd pfd = {.fd = s->fd, .events = POLLIN};
     const int pr = poll(&pfd, 1, timeout_ms);
     if (pr < 0) {
@@ -190,8 +181,7 @@ int loadid_modbus_ft_server_poll(loadid_modbus_ft_server_t *s, int timeout_ms)
 }
 
 void loadid_modbus_ft_server_stats(loadid_modbus_ft_server_t *s,
-                                   loadid_modbus_ft_server_stats_t *out)
-{
+                                   loadid_modbus_ft_server_stats_t *out) {
     pthread_mutex_lock(&s->lock);
     *out = s->st;
     pthread_mutex_unlock(&s->lock);

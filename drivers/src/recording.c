@@ -17,12 +17,12 @@ struct loadid_recording_reader {
     FILE *lcm_file;
     loadid_eventlog_t *lcm;
     /* one event of lookahead per stream */
-    int can_state;                /* 1 pending, 0 ended, <0 a bad line pending */
+    int can_state; /* 1 pending, 0 ended, <0 a bad line pending */
     loadid_can_frame_t can_frame;
     long can_line;
-    int lcm_state;                /* 1 pending, 0 ended, <0 a read error */
+    int lcm_state; /* 1 pending, 0 ended, <0 a read error */
     loadid_eventlog_event_t lcm_event;
-    int lcm_given;                /* lcm_event was handed out: read the next
+    int lcm_given; /* lcm_event was handed out: read the next
                                      one on the next call (the reader has
                                      one buffer, which the caller's event
                                      points into until then) */

@@ -18,9 +18,9 @@
 /* A CAN_RAW socket (flags: SOCK_NONBLOCK or 0) bound to ifname after
  * configure(fd, ctx) set its options. Returns the fd or -errno with a
  * reason in err. */
-static int open_bound(const char *ifname, int flags, int (*configure)(int fd, const void *ctx,
-                                                                       const char **what),
-                      const void *ctx, char *err, size_t errlen) {
+static int open_bound(const char *ifname, int flags,
+                      int (*configure)(int fd, const void *ctx, const char **what), const void *ctx,
+                      char *err, size_t errlen) {
     if (!ifname || strlen(ifname) >= IFNAMSIZ) {
         snprintf(err, errlen, "invalid CAN interface name");
         return -EINVAL;
@@ -44,16 +44,20 @@ static int open_bound(const char *ifname, int flags, int (*configure)(int fd, co
     memset(&addr, 0, sizeof addr);
     addr.can_family = AF_CAN;
     const char *what = NULL;
-    if (ioctl(fd, SIOCGIFINDEX, &ifr) < 0) what = "no such interface";
-    else if (configure(fd, ctx, &what) < 0) (void)0;
+    if (ioctl(fd, SIOCGIFINDEX, &ifr) < 0)
+        what = "no such interface";
+    else if (configure(fd, ctx, &what) < 0)
+        (void)0;
     else if ((addr.can_ifindex = ifr.ifr_ifindex),
-             bind(fd, (struct sockaddr *)&addr, sizeof addr) < 0) what = "bind";
+             bind(fd, (struct sockaddr *)&addr, sizeof addr) < 0)
+        what = "bind";
     if (what) {
         int e = errno;
         if (e == ENODEV && !strcmp(what, "no such interface"))
-            snprintf(err, errlen, "%s: %s: %s (a virtual bus: 'ip link add dev %s type vcan && "
-                                  "ip link set up dev %s'; a real one: 'ip link set up dev %s "
-                                  "type can bitrate <bit/s>')",
+            snprintf(err, errlen,
+                     "%s: %s: %s (a virtual bus: 'ip link add dev %s type vcan && "
+                     "ip link set up dev %s'; a real one: 'ip link set up dev %s "
+                     "type can bitrate <bit/s>')",
                      ifname, what, strerror(e), ifname, ifname, ifname);
         else
             snprintf(err, errlen, "%s: %s: %s", ifname, what, strerror(e));
@@ -74,11 +78,14 @@ static int configure_rx(int fd, const void *ctx, const char **what) {
     }
     const can_err_mask_t err_mask = CAN_ERR_MASK;
     const int one = 1;
-    if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filter, sizeof filter) < 0) *what = "filter";
+    if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filter, sizeof filter) < 0)
+        *what = "filter";
     else if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) < 0)
         *what = "error filter";
-    else if (setsockopt(fd, SOL_SOCKET, SO_TIMESTAMP, &one, sizeof one) < 0) *what = "time stamps";
-    else if (setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one) < 0) *what = "drop count";
+    else if (setsockopt(fd, SOL_SOCKET, SO_TIMESTAMP, &one, sizeof one) < 0)
+        *what = "time stamps";
+    else if (setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one) < 0)
+        *what = "drop count";
     if (*what) return -1;
     /* Room for bursts: a loop held up reads them late instead of the kernel
      * dropping them. The kernel doubles the 1 MiB asked and charges each
@@ -115,7 +122,9 @@ int loadid_socketcan_read(int fd, loadid_can_frame_t *frame, uint32_t *drops) {
         struct cmsghdr align;
     } control;
     struct iovec iov = {.iov_base = &cf, .iov_len = sizeof cf};
-    struct msghdr msg = {.msg_iov = &iov, .msg_iovlen = 1, .msg_control = control.buf,
+    struct msghdr msg = {.msg_iov = &iov,
+                         .msg_iovlen = 1,
+                         .msg_control = control.buf,
                          .msg_controllen = sizeof control.buf};
     ssize_t n = recvmsg(fd, &msg, 0);
     if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR ? 0 : -errno;

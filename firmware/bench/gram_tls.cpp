@@ -16,14 +16,14 @@ using loadid::Real;
 constexpr int N = LOADID_NPHI;
 constexpr int N1 = N + 1;
 
-}  // namespace
+} // namespace
 
 struct loadid_gram_tls {
     explicit loadid_gram_tls(const loadid_est_config_t &c)
         : cfg(c), t(loadid::col_weights<N>(c)), excitation(loadid::row_weights(c), t) {}
     loadid_est_config_t cfg;
     loadid::Vec<N1> t;
-    loadid::Excitation<N> excitation;  // its Gram matrix is the shortcut's
+    loadid::Excitation<N> excitation; // its Gram matrix is the shortcut's
     int64_t samples = 0;
 };
 
@@ -33,19 +33,24 @@ extern "C" int loadid_gram_tls_create(const loadid_est_config_t *cfg, loadid_gra
     return *out ? 0 : -ENOMEM;
 }
 
-extern "C" void loadid_gram_tls_destroy(loadid_gram_tls_t *g) { delete g; }
+extern "C" void loadid_gram_tls_destroy(loadid_gram_tls_t *g) {
+    delete g;
+}
 
 extern "C" void loadid_gram_tls_reset(loadid_gram_tls_t *g) {
     g->excitation.reset();
     g->samples = 0;
 }
 
-extern "C" void loadid_gram_tls_update(loadid_gram_tls_t *g, const loadid_real_t *A, const loadid_real_t *y) {
-    g->excitation.add(loadid::Regressor<N>(loadid::ConstRegressorMap<N>(A)), Eigen::Map<const loadid::Vec6>(y));
+extern "C" void loadid_gram_tls_update(loadid_gram_tls_t *g, const loadid_real_t *A,
+                                       const loadid_real_t *y) {
+    g->excitation.add(loadid::Regressor<N>(loadid::ConstRegressorMap<N>(A)),
+                      Eigen::Map<const loadid::Vec6>(y));
     ++g->samples;
 }
 
-extern "C" int loadid_gram_tls_estimate(const loadid_gram_tls_t *g, loadid_real_t *phi, loadid_est_info_t *info) {
+extern "C" int loadid_gram_tls_estimate(const loadid_gram_tls_t *g, loadid_real_t *phi,
+                                        loadid_est_info_t *info) {
     using Mat = Eigen::Matrix<Real, N1, N1>;
     const Mat gram = g->excitation.gram().selfadjointView<Eigen::Lower>();
     const Eigen::SelfAdjointEigenSolver<Mat> es(gram);

@@ -27,7 +27,8 @@ void loadid_gram_tls_reset(loadid_gram_tls_t *g);
 void loadid_gram_tls_update(loadid_gram_tls_t *g, const loadid_real_t *A, const loadid_real_t *y);
 /* phi (10) and the same figures as loadid_est_estimate's gate (condition
  * number, noise ratio); returns 0 or a LOADID_E_* code. */
-int loadid_gram_tls_estimate(const loadid_gram_tls_t *g, loadid_real_t *phi, loadid_est_info_t *info);
+int loadid_gram_tls_estimate(const loadid_gram_tls_t *g, loadid_real_t *phi,
+                             loadid_est_info_t *info);
 
 #ifdef __cplusplus
 }

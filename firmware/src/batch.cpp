@@ -19,4 +19,4 @@ loadid_est *make_batch(const loadid_est_config_t &c) {
 template loadid_est *make_batch<LOADID_NPHI>(const loadid_est_config_t &);
 template loadid_est *make_batch<LOADID_NPHI_OFFSET>(const loadid_est_config_t &);
 
-}  // namespace loadid
+} // namespace loadid

@@ -23,10 +23,9 @@ class Batch final : public loadid_est {
     static constexpr int N1 = N + 1;
     using MatR = Eigen::Matrix<Real, N1, N1>;
 
-public:
+  public:
     explicit Batch(const loadid_est_config_t &c)
-        : loadid_est(c), d_(row_weights(c)), t_(col_weights<N>(c)),
-          excitation_(d_, t_) {}
+        : loadid_est(c), d_(row_weights(c)), t_(col_weights<N>(c)), excitation_(d_, t_) {}
 
     // The one allocation; false when out of memory.
     bool allocate() {
@@ -82,11 +81,12 @@ public:
     int estimate(Real *phi, loadid_est_info_t *info) const override {
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
-        const int gate = excitation_gate(excitation_, excitation_.noise_ratio(col_exact<N>(cfg)), cfg, samples_, info);
+        const int gate = excitation_gate(excitation_, excitation_.noise_ratio(col_exact<N>(cfg)),
+                                         cfg, samples_, info);
         if (gate) return gate;
         if (samples_ < 2) return LOADID_E_NOT_EXCITED;
 
-        MatR R = MatR::Zero();  // QR of all rows D [A y], from scratch
+        MatR R = MatR::Zero(); // QR of all rows D [A y], from scratch
         for (int64_t k = 0; k < samples_ * LOADID_NROWS; ++k) {
             const Eigen::Map<const Vec<N1>> row(rows_.get() + k * N1);
             givens_add_row<N1>(R, d_(static_cast<int>(k % LOADID_NROWS)) * row);
@@ -119,11 +119,18 @@ public:
 
     CovInput information(const Real *phi) const override {
         const CovKind kind = cfg.method == LOADID_METHOD_LS_BATCH ? CovKind::LS : CovKind::TLS;
-        return {kind, N, excitation_.gram().data(), excitation_.gram_torque().data(), t_.data(),
-                samples_, phi, nullptr, nullptr};
+        return {kind,
+                N,
+                excitation_.gram().data(),
+                excitation_.gram_torque().data(),
+                t_.data(),
+                samples_,
+                phi,
+                nullptr,
+                nullptr};
     }
 
-private:
+  private:
     Vec6 d_;
     Vec<N1> t_;
     Excitation<N> excitation_;
@@ -131,4 +138,4 @@ private:
     int64_t samples_ = 0;
 };
 
-}  // namespace loadid
+} // namespace loadid

@@ -71,7 +71,7 @@ constexpr bool round_robin_is_complete() {
 template <int N1, int C>
 void brand_jacobi(const Vec<N1> &s, const Eigen::Matrix<Real, N1, C> &L,
                   Eigen::Matrix<Real, N1, N1> &U, Vec<N1> &sv) {
-    constexpr int kRows = (N1 + C + 1) / 2 * 2;  // even: whole SSE packets
+    constexpr int kRows = (N1 + C + 1) / 2 * 2; // even: whole SSE packets
     using Col = Eigen::Matrix<Real, kRows, 1>;
     using Sched = RoundRobin<N1>;
     constexpr int K = Sched::kPairs;
@@ -132,11 +132,11 @@ void brand_jacobi(const Vec<N1> &s, const Eigen::Matrix<Real, N1, C> &L,
             }
         }
         if (!rotated || t_max <= tiny) break;
-        for (int j = 0; j < N1; ++j) norm2(j) = weighted_norm2(j);  // refresh the running norms
+        for (int j = 0; j < N1; ++j) norm2(j) = weighted_norm2(j); // refresh the running norms
     }
     for (int j = 0; j < N1; ++j) sv(j) = std::sqrt(weighted_norm2(j));
     U = X.template topRows<N1>();
     linalg::sort_descending(U, sv, N1);
 }
 
-}  // namespace loadid
+} // namespace loadid

@@ -22,7 +22,7 @@ bool proper_rotation(const double r[9]) {
     if (!finite(r, 9)) return false;
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
-            double dot = 0;  // (R^T R)_ij: column i . column j
+            double dot = 0; // (R^T R)_ij: column i . column j
             for (int k = 0; k < 3; ++k) dot += r[3 * k + i] * r[3 * k + j];
             if (std::fabs(dot - (i == j ? 1.0 : 0.0)) > kTol) return false;
         }
@@ -45,10 +45,10 @@ bool valid_joint(const loadid_joint_desc_t &j) {
     double n2 = j.axis[0] * j.axis[0] + j.axis[1] * j.axis[1] + j.axis[2] * j.axis[2];
     if (std::fabs(std::sqrt(n2) - 1.0) > kTol) return false;
     if (std::isnan(j.lower) || std::isnan(j.upper) || !(j.lower <= j.upper)) return false;
-    return j.velocity > 0;  // +inf when the URDF gives none; NaN fails
+    return j.velocity > 0; // +inf when the URDF gives none; NaN fails
 }
 
-}  // namespace
+} // namespace
 
 extern "C" int loadid_chain_check(const loadid_chain_t *chain) {
     if (!chain) return -EINVAL;

@@ -36,4 +36,4 @@ using ConstRegressorMap = Eigen::Map<const Regressor<N>>;
 // in bench_pipeline).
 inline constexpr Real kEps = Eigen::NumTraits<Real>::epsilon();
 
-}  // namespace loadid
+} // namespace loadid

@@ -16,4 +16,4 @@ std::underlying_type_t<E> enum_value(const E &e) {
     return v;
 }
 
-}  // namespace loadid
+} // namespace loadid

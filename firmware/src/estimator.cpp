@@ -14,9 +14,13 @@ using namespace loadid;
 
 namespace {
 
-bool positive_finite(loadid_real_t v) { return std::isfinite(v) && v > 0; }
+bool positive_finite(loadid_real_t v) {
+    return std::isfinite(v) && v > 0;
+}
 
-bool valid_method(int m) { return m >= LOADID_METHOD_RLS && m <= LOADID_METHOD_REFINED; }
+bool valid_method(int m) {
+    return m >= LOADID_METHOD_RLS && m <= LOADID_METHOD_REFINED;
+}
 
 bool valid_config(const loadid_est_config_t &c) {
     if (!valid_method(c.method)) return false;
@@ -39,18 +43,21 @@ template <int N>
 loadid_est *make(const loadid_est_config_t &c) {
     switch (c.method) {
         case LOADID_METHOD_RLS:
-        case LOADID_METHOD_RIV: return make_recursive_ls<N>(c);
-        case LOADID_METHOD_RTLS: return make_rtls<N>(c);
+        case LOADID_METHOD_RIV:
+            return make_recursive_ls<N>(c);
+        case LOADID_METHOD_RTLS:
+            return make_rtls<N>(c);
         case LOADID_METHOD_LS_BATCH:
         case LOADID_METHOD_TLS_BATCH:
-        case LOADID_METHOD_REFINED: return make_batch<N>(c);
+        case LOADID_METHOD_REFINED:
+            return make_batch<N>(c);
     }
     return nullptr;
 }
 
 const char *const kNames[] = {"?", "RLS", "RIV", "RTLS", "LS_BATCH", "TLS_BATCH", "REFINED"};
 
-}  // namespace
+} // namespace
 
 extern "C" int loadid_est_config_default(loadid_method_t method, int n_params,
                                          loadid_est_config_t *cfg) {
@@ -99,18 +106,19 @@ extern "C" int loadid_est_weights_from_noise(loadid_est_config_t *cfg, loadid_re
     const Real q = Real(2) * omega_typ * omega_typ * sigma_omega * sigma_omega;
     const Real if2 = Real(1) / (sigma_f * sigma_f), it2 = Real(1) / (sigma_tau * sigma_tau);
     const Real col_var[LOADID_NPHI] = {
-        Real(3) * s2 * if2,                                   // m: a - g in 3 force rows
-        (Real(2) * b2 + Real(3) * q) * if2 + Real(2) * s2 * it2,  // m c_x: 2 alpha, 3 w w; 2 a - g
-        (Real(2) * b2 + Real(3) * q) * if2 + Real(2) * s2 * it2,  // m c_y
-        (Real(2) * b2 + Real(3) * q) * if2 + Real(2) * s2 * it2,  // m c_z
-        (b2 + Real(2) * q) * it2,                             // Ixx: alpha_x, 2 w w
-        (Real(2) * b2 + Real(3) * q) * it2,                   // Ixy
-        (Real(2) * b2 + Real(3) * q) * it2,                   // Ixz
-        (b2 + Real(2) * q) * it2,                             // Iyy
-        (Real(2) * b2 + Real(3) * q) * it2,                   // Iyz
-        (b2 + Real(2) * q) * it2,                             // Izz
+        Real(3) * s2 * if2,                                      // m: a - g in 3 force rows
+        (Real(2) * b2 + Real(3) * q) * if2 + Real(2) * s2 * it2, // m c_x: 2 alpha, 3 w w; 2 a - g
+        (Real(2) * b2 + Real(3) * q) * if2 + Real(2) * s2 * it2, // m c_y
+        (Real(2) * b2 + Real(3) * q) * if2 + Real(2) * s2 * it2, // m c_z
+        (b2 + Real(2) * q) * it2,                                // Ixx: alpha_x, 2 w w
+        (Real(2) * b2 + Real(3) * q) * it2,                      // Ixy
+        (Real(2) * b2 + Real(3) * q) * it2,                      // Ixz
+        (b2 + Real(2) * q) * it2,                                // Iyy
+        (Real(2) * b2 + Real(3) * q) * it2,                      // Iyz
+        (b2 + Real(2) * q) * it2,                                // Izz
     };
-    for (int j = 0; j < LOADID_NPHI; ++j) cfg->col_weight[j] = std::sqrt(Real(LOADID_NROWS) / col_var[j]);
+    for (int j = 0; j < LOADID_NPHI; ++j)
+        cfg->col_weight[j] = std::sqrt(Real(LOADID_NROWS) / col_var[j]);
     if (cfg->n_params == LOADID_NPHI_OFFSET) {
         // The offset columns [E6] are exact: a large weight makes TLS treat
         // them as (nearly) error-free, the mixed LS-TLS limit.
@@ -124,14 +132,16 @@ extern "C" int loadid_est_create(const loadid_est_config_t *cfg, loadid_est_t **
     if (!cfg || !out) return -EINVAL;
     *out = nullptr;
     if (!valid_config(*cfg)) return -EINVAL;
-    loadid_est *e = cfg->n_params == LOADID_NPHI ? make<LOADID_NPHI>(*cfg)
-                                                 : make<LOADID_NPHI_OFFSET>(*cfg);
+    loadid_est *e =
+        cfg->n_params == LOADID_NPHI ? make<LOADID_NPHI>(*cfg) : make<LOADID_NPHI_OFFSET>(*cfg);
     if (!e) return -ENOMEM;
     *out = e;
     return 0;
 }
 
-extern "C" void loadid_est_destroy(loadid_est_t *est) { delete est; }
+extern "C" void loadid_est_destroy(loadid_est_t *est) {
+    delete est;
+}
 
 extern "C" int loadid_est_reset(loadid_est_t *est) {
     if (!est) return -EINVAL;
@@ -198,7 +208,7 @@ extern "C" int loadid_est_residual_scales(const loadid_est_t *est, const loadid_
     } else {
         const Eigen::LDLT<Mat17> ldlt(g.topLeftCorner(n, n));
         if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return LOADID_E_NOT_EXCITED;
-        v.head(n) = ldlt.solve(g.col(n).head(n)) / in.t[n];  // T1^-1 phi_LS
+        v.head(n) = ldlt.solve(g.col(n).head(n)) / in.t[n]; // T1^-1 phi_LS
     }
     v(n) = Real(-1) / in.t[n];
     const Real norm = v.norm();
@@ -211,8 +221,8 @@ extern "C" int loadid_est_residual_scales(const loadid_est_t *est, const loadid_
     return 0;
 }
 
-extern "C" int loadid_est_update(loadid_est_t *est, const loadid_real_t *A,
-                                 const loadid_real_t *C, const loadid_real_t y[6]) {
+extern "C" int loadid_est_update(loadid_est_t *est, const loadid_real_t *A, const loadid_real_t *C,
+                                 const loadid_real_t y[6]) {
     if (!est || !A || !y) return -EINVAL;
     const int n = est->cfg.n_params;
     const bool riv = est->cfg.method == LOADID_METHOD_RIV;

@@ -33,5 +33,5 @@ struct loadid_est {
     // it (loadid_est_uncertainty and its neighbours in estimator.cpp).
     virtual loadid::CovInput information(const loadid_real_t *phi) const = 0;
 
-    loadid_est_config_t cfg;  // changed only by loadid_est_set_weights
+    loadid_est_config_t cfg; // changed only by loadid_est_set_weights
 };

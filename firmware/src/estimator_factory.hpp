@@ -14,4 +14,4 @@ loadid_est *make_rtls(const loadid_est_config_t &c);
 template <int N>
 loadid_est *make_batch(const loadid_est_config_t &c);
 
-}  // namespace loadid
+} // namespace loadid

@@ -24,8 +24,10 @@ template <int N>
 class Excitation {
     static constexpr int N1 = N + 1;
 
-public:
-    Excitation(const Vec6 &row_weight, const Vec<N1> &col_weight) : d_(row_weight), t_(col_weight) { reset(); }
+  public:
+    Excitation(const Vec6 &row_weight, const Vec<N1> &col_weight) : d_(row_weight), t_(col_weight) {
+        reset();
+    }
 
     void reset() {
         warm_ = false;
@@ -116,7 +118,8 @@ public:
             v_max_ = v.col(N - 1);
             warm_ = v_min_.allFinite() && v_max_.allFinite();
         }
-        if (!(lmax > 0) || !(lmin > lmax * Real(N) * kEps)) return std::numeric_limits<Real>::infinity();
+        if (!(lmax > 0) || !(lmin > lmax * Real(N) * kEps))
+            return std::numeric_limits<Real>::infinity();
         return std::sqrt(lmax / lmin);
     }
 
@@ -142,7 +145,7 @@ public:
     const Eigen::Matrix<Real, N1, N1> &gram_torque() const { return gram_torque_; }
     const Vec<N1> &col_weight() const { return t_; }
 
-private:
+  private:
     static constexpr int kWarmSteps = 4;
 
     // rho = v^T G v and the residual norm ||G v - rho v|| of a unit v.
@@ -195,12 +198,12 @@ private:
                 S(i, j) = x * inv;
             }
         }
-        for (int i = 0; i < N; ++i) {  // L z = v
+        for (int i = 0; i < N; ++i) { // L z = v
             Real x = v(i);
             for (int k = 0; k < i; ++k) x -= S(i, k) * v(k);
             v(i) = x / S(i, i);
         }
-        for (int i = N - 1; i >= 0; --i) {  // L^T x = z
+        for (int i = N - 1; i >= 0; --i) { // L^T x = z
             Real x = v(i);
             for (int k = i + 1; k < N; ++k) x -= S(k, i) * v(k);
             v(i) = x / S(i, i);
@@ -272,4 +275,4 @@ inline int excitation_gate(const Excitation<N> &ex, Real ratio, const loadid_est
     return 0;
 }
 
-}  // namespace loadid
+} // namespace loadid

@@ -15,4 +15,4 @@ inline bool all_finite(const loadid_real_t *v, int n) {
     return true;
 }
 
-}  // namespace loadid
+} // namespace loadid

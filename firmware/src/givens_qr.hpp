@@ -30,4 +30,4 @@ void givens_add_row(Eigen::Matrix<Real, N1, N1> &R, Vec<N1> x) {
     }
 }
 
-}  // namespace loadid
+} // namespace loadid

@@ -13,7 +13,7 @@ using namespace loadid;
 
 namespace {
 
-Mat3 sym3(const Real v[6]) {  // [xx xy xz yy yz zz]
+Mat3 sym3(const Real v[6]) { // [xx xy xz yy yz zz]
     Mat3 I;
     I << v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5];
     return I;
@@ -24,14 +24,14 @@ Mat3 parallel_axis(const Vec3 &c) {
     return c.squaredNorm() * Mat3::Identity() - c * c.transpose();
 }
 
-}  // namespace
+} // namespace
 
 extern "C" int loadid_phi_to_physical(const loadid_real_t phi[10], loadid_physical_t *out) {
     if (!phi || !out) return -EINVAL;
     if (!all_finite(phi, LOADID_NPHI)) return LOADID_E_NONFINITE;
     *out = loadid_physical_t{};
     const Real m = phi[0];
-    const Vec3 h(phi[1], phi[2], phi[3]);  // m c
+    const Vec3 h(phi[1], phi[2], phi[3]); // m c
     const Mat3 Is = sym3(phi + 4);
     const Real rel = sizeof(Real) == sizeof(float) ? Real(1e-5) : Real(1e-9);
     out->mass = m;
@@ -39,7 +39,7 @@ extern "C" int loadid_phi_to_physical(const loadid_real_t phi[10], loadid_physic
     if (m > 0) {
         const Vec3 c = h / m;
         for (int i = 0; i < 3; ++i) out->com[i] = c(i);
-        Ic = Is - m * parallel_axis(c);  // I_C = I_S - m (c.c E - c c^T)
+        Ic = Is - m * parallel_axis(c); // I_C = I_S - m (c.c E - c c^T)
     } else {
         out->violations |= LOADID_PHYS_MASS_NOT_POSITIVE;
     }
@@ -47,7 +47,7 @@ extern "C" int loadid_phi_to_physical(const loadid_real_t phi[10], loadid_physic
     for (int i = 0; i < 6; ++i) out->inertia_com[i] = v[i];
 
     const Eigen::SelfAdjointEigenSolver<Mat3> es(Ic, Eigen::EigenvaluesOnly);
-    const Vec3 p = es.eigenvalues();  // ascending
+    const Vec3 p = es.eigenvalues(); // ascending
     for (int i = 0; i < 3; ++i) out->principal[i] = p(i);
     const Real scale = std::max(std::abs(p(2)), std::numeric_limits<Real>::min());
     if (!(p(0) > rel * scale)) out->violations |= LOADID_PHYS_INERTIA_NOT_PD;
@@ -63,7 +63,8 @@ extern "C" int loadid_phi_to_physical(const loadid_real_t phi[10], loadid_physic
     if (m > 0) {
         const Mat3 Sc = Real(0.5) * Ic.trace() * Mat3::Identity() - Ic;
         const Eigen::SelfAdjointEigenSolver<Mat3> es2(Sc, Eigen::EigenvaluesOnly);
-        if (!(es2.eigenvalues()(0) > rel * scale)) out->violations |= LOADID_PHYS_PSEUDO_INERTIA_NOT_PD;
+        if (!(es2.eigenvalues()(0) > rel * scale))
+            out->violations |= LOADID_PHYS_PSEUDO_INERTIA_NOT_PD;
     } else {
         out->violations |= LOADID_PHYS_PSEUDO_INERTIA_NOT_PD;
     }

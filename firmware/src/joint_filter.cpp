@@ -30,16 +30,18 @@ using Real = loadid_real_t;
 namespace {
 
 constexpr int kMaxJoints = 16;
-constexpr int kRing = 2 * LOADID_JF_MAX_LAG + 1;  // fixed-lag history, updates
-constexpr size_t kWorkPerSample = 9;  // smoother: x (3) and the upper triangle of P (6)
+constexpr int kRing = 2 * LOADID_JF_MAX_LAG + 1; // fixed-lag history, updates
+constexpr size_t kWorkPerSample = 9;             // smoother: x (3) and the upper triangle of P (6)
 
 // Mean and covariance of one joint's x = [q, qd, qdd].
 struct Gauss {
     Real x[3];
-    Real P[3][3];  // symmetric: both triangles are kept equal
+    Real P[3][3]; // symmetric: both triangles are kept equal
 };
 
-bool positive_finite(Real v) { return std::isfinite(v) && v > 0; }
+bool positive_finite(Real v) {
+    return std::isfinite(v) && v > 0;
+}
 
 bool valid_config(const loadid_jf_config_t *c) {
     return c && positive_finite(c->jerk_psd) && positive_finite(c->meas_sigma) &&
@@ -75,8 +77,8 @@ void initialise(Gauss &g, Real z, const loadid_jf_config_t &c) {
 // The model over a step dt > 0 ([BLK] 6.2.3): F(dt) and jerk_psd Q(dt),
 // the same for every joint of an update.
 struct Step {
-    Real dt, h;    // F(dt) = [1 dt h; 0 1 dt; 0 0 1], h = dt^2 / 2
-    Real Q[3][3];  // jerk_psd Q(dt)
+    Real dt, h;   // F(dt) = [1 dt h; 0 1 dt; 0 0 1], h = dt^2 / 2
+    Real Q[3][3]; // jerk_psd Q(dt)
 };
 
 Step step_of(Real dt, Real jerk_psd) {
@@ -102,12 +104,14 @@ void predict(Gauss &g, const Step &m) {
         for (int j = 0; j < 3; ++j)
             FP[i][j] = F[i][0] * g.P[0][j] + F[i][1] * g.P[1][j] + F[i][2] * g.P[2][j];
     for (int i = 0; i < 3; ++i)
-        for (int j = i; j < 3; ++j)  // upper triangle of F P F^T + Q, mirrored
-            g.P[i][j] = g.P[j][i] = FP[i][0] * F[j][0] + FP[i][1] * F[j][1] + FP[i][2] * F[j][2] +
-                                    m.Q[i][j];
+        for (int j = i; j < 3; ++j) // upper triangle of F P F^T + Q, mirrored
+            g.P[i][j] = g.P[j][i] =
+                FP[i][0] * F[j][0] + FP[i][1] * F[j][1] + FP[i][2] * F[j][2] + m.Q[i][j];
 }
 
-void predict(Gauss &g, Real dt, Real jerk_psd) { predict(g, step_of(dt, jerk_psd)); }
+void predict(Gauss &g, Real dt, Real jerk_psd) {
+    predict(g, step_of(dt, jerk_psd));
+}
 
 // Measurement update with z = q + v, var(v) = r, H = [1 0 0] ([BLK] 5.2):
 // K = P H^T / s, s = H P H^T + r; x <- x + K (z - H x); and P in Joseph
@@ -122,7 +126,7 @@ void correct(Gauss &g, Real z, Real r) {
     // A = I - K H: only its first column differs from I; A[0][0] = 1 - K[0]
     // is taken as r / s, without the cancellation.
     const Real a0[3] = {r / s, -K[1], -K[2]};
-    Real AP[3][3];  // A P: row i is P[i] + a0[i] P[0] (i > 0), a0[0] P[0] (i = 0)
+    Real AP[3][3]; // A P: row i is P[i] + a0[i] P[0] (i > 0), a0[0] P[0] (i = 0)
     for (int j = 0; j < 3; ++j) {
         AP[0][j] = a0[0] * g.P[0][j];
         AP[1][j] = g.P[1][j] + a0[1] * g.P[0][j];
@@ -219,7 +223,7 @@ struct Bank {
         for (int i = 0; i < n; ++i) {
             const Real p00 = P[0][0][i], p01 = P[0][1][i], p02 = P[0][2][i];
             const Real p10 = P[1][0][i], p11 = P[1][1][i], p12 = P[1][2][i];
-            const Real p20 = P[2][0][i], p22 = P[2][2][i];  // P[2][1] is not read
+            const Real p20 = P[2][0][i], p22 = P[2][2][i]; // P[2][1] is not read
             const Real s = p00 + r;
             const Real k0 = p00 / s, k1 = p10 / s, k2 = p20 / s;
             const Real e = z[i] - x[0][i];
@@ -230,7 +234,7 @@ struct Bank {
             // AP: row 0 a0 P[0], row c P[c] + a_c P[0]
             const Real ap00 = a0 * p00, ap01 = a0 * p01, ap02 = a0 * p02;
             const Real ap10 = p10 + a1 * p00, ap11 = p11 + a1 * p01, ap12 = p12 + a1 * p02;
-            const Real ap20 = p20 + a2 * p00, ap22 = p22 + a2 * p02;  // AP[2][1] is not needed
+            const Real ap20 = p20 + a2 * p00, ap22 = p22 + a2 * p02; // AP[2][1] is not needed
             // P[a][b] = (b == 0 ? AP[a][0] a0 : AP[a][b] + AP[a][0] a_b) + r K[a] K[b]
             const Real q00 = ap00 * a0 + r * k0 * k0;
             const Real q01 = ap01 + ap00 * a1 + r * k0 * k1;
@@ -244,7 +248,7 @@ struct Bank {
     }
 };
 
-}  // namespace
+} // namespace
 
 // The fixed-lag smoother's history: per update its time, the piece of the
 // series it belongs to (a restart after a gap begins a new one), each
@@ -254,8 +258,8 @@ struct Bank {
 struct LagEntry {
     int64_t t;
     int piece;
-    int seq;  // updates before it since the filter's (re)start (capped): settled from settle on
-    Real xpred[3][kMaxJoints];  // x(j|j-1): xpred[c][i], component c of joint i
+    int seq; // updates before it since the filter's (re)start (capped): settled from settle on
+    Real xpred[3][kMaxJoints]; // x(j|j-1): xpred[c][i], component c of joint i
     // Its smoothed state so far, x(j|j-1) + sum_{k < terms} B_k nu(j+k)
     // (terms -1: not begun): a sample extends the sum with the updates
     // that came since the last, the same additions in the same order.
@@ -266,7 +270,7 @@ struct LagEntry {
 struct loadid_jf {
     loadid_jf_config_t cfg;
     int n;
-    int64_t last;  // INT64_MIN: no measurement since create or reset
+    int64_t last; // INT64_MIN: no measurement since create or reset
     Bank joints;
     // Fixed-lag smoothing (cfg.lag_steps > 0): gains B_i, i = 0..lag, and
     // the ring of the last kRing updates, their innovations apart (a
@@ -274,12 +278,12 @@ struct loadid_jf {
     Real gain[LOADID_JF_MAX_LAG + 1][3];
     LagEntry ring[kRing];
     Real nu[kRing][kMaxJoints];
-    int ring_head, ring_count;  // the oldest entry, and how many
-    int piece;                  // the current piece of the series
-    int piece_entries;          // its entries, at the ring's end
-    int64_t piece_start;        // the time of its first update (no entry)
-    int since_start;            // updates since the filter's (re)start (capped)
-    int settle;                 // loadid_jf_settle_steps
+    int ring_head, ring_count; // the oldest entry, and how many
+    int piece;                 // the current piece of the series
+    int piece_entries;         // its entries, at the ring's end
+    int64_t piece_start;       // the time of its first update (no entry)
+    int since_start;           // updates since the filter's (re)start (capped)
+    int settle;                // loadid_jf_settle_steps
 };
 
 extern "C" int loadid_jf_config_default(loadid_jf_config_t *cfg) {
@@ -287,7 +291,8 @@ extern "C" int loadid_jf_config_default(loadid_jf_config_t *cfg) {
     // Tuned on multi-sine joint motion up to 2 Hz, 1 kHz, 2^20 counts per
     // revolution: see the figures in joint_filter.h.
     cfg->jerk_psd = Real(1e3);
-    cfg->meas_sigma = Real(6.283185307179586 / 1048576.0 / 3.4641016151377546);  // 2 pi / 2^20 / sqrt(12)
+    cfg->meas_sigma =
+        Real(6.283185307179586 / 1048576.0 / 3.4641016151377546); // 2 pi / 2^20 / sqrt(12)
     cfg->init_sigma_vel = 1;
     cfg->init_sigma_acc = 10;
     cfg->max_step_us = 100000;
@@ -319,7 +324,9 @@ extern "C" int loadid_jf_create(int num_joints, const loadid_jf_config_t *cfg, l
     return 0;
 }
 
-extern "C" void loadid_jf_destroy(loadid_jf_t *jf) { delete jf; }
+extern "C" void loadid_jf_destroy(loadid_jf_t *jf) {
+    delete jf;
+}
 
 extern "C" int loadid_jf_reset(loadid_jf_t *jf) {
     if (!jf) return -EINVAL;
@@ -333,8 +340,10 @@ extern "C" int loadid_jf_reset(loadid_jf_t *jf) {
 // last kRing updates), its predicted state the filters' now and its
 // innovations z - x(k|k-1) (0 for a first update).
 static void push_entry(loadid_jf_t *jf, int64_t t_us, int seq, const Real *z) {
-    if (jf->ring_count == kRing) jf->ring_head = (jf->ring_head + 1) % kRing;
-    else ++jf->ring_count;
+    if (jf->ring_count == kRing)
+        jf->ring_head = (jf->ring_head + 1) % kRing;
+    else
+        ++jf->ring_count;
     const int slot = (jf->ring_head + jf->ring_count - 1) % kRing;
     LagEntry *e = &jf->ring[slot];
     e->t = t_us;
@@ -394,7 +403,9 @@ extern "C" int loadid_jf_state_at(const loadid_jf_t *jf, int64_t t_us, loadid_re
     return 0;
 }
 
-extern "C" int64_t loadid_jf_last_time(const loadid_jf_t *jf) { return jf ? jf->last : INT64_MIN; }
+extern "C" int64_t loadid_jf_last_time(const loadid_jf_t *jf) {
+    return jf ? jf->last : INT64_MIN;
+}
 
 // The entry that is index k of the ring, oldest first.
 static const LagEntry &ring_at(const loadid_jf_t *jf, int k) {
@@ -406,11 +417,13 @@ extern "C" int loadid_jf_end_piece(loadid_jf_t *jf) {
     if (jf->last == INT64_MIN) return 0;
     ++jf->piece;
     jf->piece_entries = 0;
-    jf->piece_start = jf->last + 1;  // what came before is served now
-    return 0;  // the filter goes on: no settling
+    jf->piece_start = jf->last + 1; // what came before is served now
+    return 0;                       // the filter goes on: no settling
 }
 
-extern "C" int loadid_jf_settle_steps(const loadid_jf_t *jf) { return jf ? jf->settle : -EINVAL; }
+extern "C" int loadid_jf_settle_steps(const loadid_jf_t *jf) {
+    return jf ? jf->settle : -EINVAL;
+}
 
 extern "C" int loadid_jf_settled(const loadid_jf_t *jf) {
     return jf && jf->last != INT64_MIN && jf->since_start > jf->settle;
@@ -418,7 +431,9 @@ extern "C" int loadid_jf_settled(const loadid_jf_t *jf) {
 
 // Entries of the current piece at the ring's end (kept as they come: the
 // walk back over the ring cost as much as the smoothing itself).
-static int current_entries(const loadid_jf_t *jf) { return jf->piece_entries; }
+static int current_entries(const loadid_jf_t *jf) {
+    return jf->piece_entries;
+}
 
 extern "C" int64_t loadid_jf_lagged_time(const loadid_jf_t *jf) {
     if (!jf || jf->cfg.lag_steps <= 0 || jf->last == INT64_MIN) return INT64_MIN;
@@ -439,7 +454,8 @@ static int updates_after(const loadid_jf_t *jf, int j, int lag) {
     if (piece == jf->piece) return std::min(lag, jf->ring_count - 1 - j);
     if (j + lag < jf->ring_count && ring_at(jf, j + lag).piece == piece) return lag;
     int after = 0;
-    while (j + after + 1 < jf->ring_count && after < lag && ring_at(jf, j + after + 1).piece == piece)
+    while (j + after + 1 < jf->ring_count && after < lag &&
+           ring_at(jf, j + after + 1).piece == piece)
         ++after;
     return after;
 }
@@ -499,19 +515,20 @@ static const Real (&smoothed(const loadid_jf_t *jf, int j, int after))[3][kMaxJo
 // The newest kept update at or before t serves it: with lag_steps updates
 // after it in its piece, or, in a piece that has ended, with those it had.
 extern "C" int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, int64_t max_age_us,
-                                         loadid_real_t *q, loadid_real_t *qd,
-                                         loadid_real_t *qdd) {
+                                         loadid_real_t *q, loadid_real_t *qd, loadid_real_t *qdd) {
     if (!jf || jf->cfg.lag_steps <= 0) return -EINVAL;
     const int lag = jf->cfg.lag_steps;
     if (jf->ring_count == 0) return LOADID_E_NO_DATA;
     // Before every kept update: served from the first, when close to it.
     if (ring_at(jf, 0).t > t_us && distance_us(t_us, ring_at(jf, 0).t) > uint64_t(max_age_us))
         return LOADID_E_STALE;
-    int lo = 0, hi = jf->ring_count - 1;  // the newest update at or before t: binary search
+    int lo = 0, hi = jf->ring_count - 1; // the newest update at or before t: binary search
     while (lo < hi) {
         const int mid = (lo + hi + 1) / 2;
-        if (ring_at(jf, mid).t <= t_us) lo = mid;
-        else hi = mid - 1;
+        if (ring_at(jf, mid).t <= t_us)
+            lo = mid;
+        else
+            hi = mid - 1;
     }
     int j = lo;
     // Too far after it, but the next update (a piece that began after a
@@ -523,7 +540,7 @@ extern "C" int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, in
     // The filter had not settled there: never served (joint_filter.h).
     if (e0.seq < jf->settle) return LOADID_E_STALE;
     const int after = updates_after(jf, j, lag);
-    if (e0.piece == jf->piece && after < lag) return LOADID_E_NO_DATA;  // not smoothed yet
+    if (e0.piece == jf->piece && after < lag) return LOADID_E_NO_DATA; // not smoothed yet
     if (distance_us(e0.t, t_us) > uint64_t(max_age_us)) return LOADID_E_STALE;
     // Between two updates of a piece, qdd is interpolated between both
     // smoothed states (the next one with the updates it has, lag - 1 for
@@ -537,7 +554,7 @@ extern "C" int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, in
     const Real w = next ? dt / step : Real(0);
     const int after1 = next ? updates_after(jf, j + 1, lag) : 0;
     const Real(&xs)[3][kMaxJoints] = smoothed(jf, j, after);
-    const Real *qdd1 = next ? smoothed(jf, j + 1, after1)[2] : nullptr;  // only its qdd is used
+    const Real *qdd1 = next ? smoothed(jf, j + 1, after1)[2] : nullptr; // only its qdd is used
     for (int i = 0; i < jf->n; ++i) {
         const Real x[3] = {xs[0][i], xs[1][i], xs[2][i]};
         Real a = x[2], jerk = 0;
@@ -585,9 +602,9 @@ extern "C" int loadid_jf_smooth(const loadid_jf_config_t *cfg, size_t count, con
         store(g, work + kWorkPerSample * k);
     }
     for (size_t k = count - 1; k-- > 0;) {
-        if (is_gap(t_us[k], t_us[k + 1], *cfg)) continue;  // end of a piece: x^s_k = x_k
+        if (is_gap(t_us[k], t_us[k + 1], *cfg)) continue; // end of a piece: x^s_k = x_k
         Real *xk = work + kWorkPerSample * k;
-        const Real *xs_next = xk + kWorkPerSample;  // already smoothed
+        const Real *xs_next = xk + kWorkPerSample; // already smoothed
         const Gauss f = load(xk);
         Gauss p = f;
         const Real dt = seconds(t_us[k], t_us[k + 1]), h = dt * dt / 2;
@@ -597,7 +614,7 @@ extern "C" int loadid_jf_smooth(const loadid_jf_config_t *cfg, size_t count, con
         // P- is positive definite by construction (Q(dt) is for dt > 0); the
         // guard only keeps rounding from ever writing a non-finite value.
         if (!ldlt_solve(p.P, d, y)) continue;
-        const Real u[3] = {y[0], dt * y[0] + y[1], h * y[0] + dt * y[1] + y[2]};  // F^T y
+        const Real u[3] = {y[0], dt * y[0] + y[1], h * y[0] + dt * y[1] + y[2]}; // F^T y
         for (int i = 0; i < 3; ++i) xk[i] += f.P[i][0] * u[0] + f.P[i][1] * u[1] + f.P[i][2] * u[2];
     }
     for (size_t k = 0; k < count; ++k) {

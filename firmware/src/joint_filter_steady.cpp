@@ -28,13 +28,13 @@ void steady_filter(const loadid_jf_config_t &cfg, double dt, M3 &F, M3 &P, M3 &P
     Q << d3 * d2 / 20, d2 * d2 / 8, d3 / 6, d2 * d2 / 8, d3 / 3, d2 / 2, d3 / 6, d2 / 2, dt;
     Q *= q;
     P = M3::Zero();
-    P.diagonal() << r, 1, 100;  // the filter's initial state (joint_filter.cpp)
+    P.diagonal() << r, 1, 100; // the filter's initial state (joint_filter.cpp)
     for (int it = 0; it < 200000; ++it) {
         Pp = F * P * F.transpose() + Q;
         const Eigen::Vector3d K = Pp.col(0) / (Pp(0, 0) + r);
         M3 A = M3::Identity();
         A.col(0) -= K;
-        const M3 next = A * Pp * A.transpose() + r * K * K.transpose();  // Joseph form
+        const M3 next = A * Pp * A.transpose() + r * K * K.transpose(); // Joseph form
         const bool done = converged(next, P);
         P = next;
         if (done) break;
@@ -42,7 +42,7 @@ void steady_filter(const loadid_jf_config_t &cfg, double dt, M3 &F, M3 &P, M3 &P
     Pp = F * P * F.transpose() + Q;
 }
 
-}  // namespace
+} // namespace
 
 namespace loadid {
 
@@ -55,7 +55,7 @@ void fixed_lag_gains(const loadid_jf_config_t &cfg, double dt, int lag, double g
     M3 IKH = M3::Identity();
     IKH.col(0) -= K;
     const M3 Fc_t = (F * IKH).transpose();
-    Eigen::Vector3d u(1, 0, 0);  // [(F (I - K H))^T]^i H^T
+    Eigen::Vector3d u(1, 0, 0); // [(F (I - K H))^T]^i H^T
     for (int i = 0; i <= lag; ++i) {
         const Eigen::Vector3d b = Pp * u / s;
         for (int c = 0; c < 3; ++c) gain[i][c] = b(c);
@@ -72,7 +72,7 @@ int settle_steps(const loadid_jf_config_t &cfg, double dt) {
     M3 Q;
     Q << d3 * d2 / 20, d2 * d2 / 8, d3 / 6, d2 * d2 / 8, d3 / 3, d2 / 2, d3 / 6, d2 / 2, dt;
     Q *= double(cfg.jerk_psd);
-    P = M3::Zero();  // after the first measurement (joint_filter.cpp, initialise)
+    P = M3::Zero(); // after the first measurement (joint_filter.cpp, initialise)
     P.diagonal() << r, double(cfg.init_sigma_vel) * double(cfg.init_sigma_vel),
         double(cfg.init_sigma_acc) * double(cfg.init_sigma_acc);
     for (int k = 1; k < kMaxSettle; ++k) {
@@ -86,7 +86,7 @@ int settle_steps(const loadid_jf_config_t &cfg, double dt) {
     return kMaxSettle;
 }
 
-}  // namespace loadid
+} // namespace loadid
 
 extern "C" int loadid_jf_noise_sigma(const loadid_jf_config_t *cfg, double dt, double sigma[3]) {
     if (!cfg || !sigma || !(std::isfinite(dt) && dt > 0)) return -EINVAL;
@@ -103,7 +103,7 @@ extern "C" int loadid_jf_noise_sigma(const loadid_jf_config_t *cfg, double dt, d
     // A unit measurement at step lag through the steady filter; the
     // estimate of step j responds to it as g(j - lag). The last lag + 1
     // innovations and predictions are kept in rings.
-    constexpr int kSpan = 4000;  // the filter forgets within about 20 ms
+    constexpr int kSpan = 4000; // the filter forgets within about 20 ms
     constexpr int kRing = LOADID_JF_MAX_LAG + 1;
     double nu[kRing], xp[kRing][3];
     const int steps = kSpan + 2 * lag + 1;
@@ -116,7 +116,7 @@ extern "C" int loadid_jf_noise_sigma(const loadid_jf_config_t *cfg, double dt, d
         nu[slot] = z - pred(0);
         for (int c = 0; c < 3; ++c) xp[slot][c] = pred(c);
         x = pred + K * nu[slot];
-        const int j = k - lag;  // its estimate is complete now
+        const int j = k - lag; // its estimate is complete now
         if (j < 0) continue;
         const int js = j % kRing;
         double e[3] = {xp[js][0], xp[js][1], xp[js][2]};

@@ -21,4 +21,4 @@ constexpr double kSettleFactor = 1.5;
 constexpr int kMaxSettle = 10000;
 int settle_steps(const loadid_jf_config_t &cfg, double dt);
 
-}  // namespace loadid
+} // namespace loadid

@@ -24,8 +24,8 @@ namespace {
 struct Fixed {
     Mat3 rot;
     Vec3 xyz;
-    bool rotates;  // rot is not the identity
-    bool moves;    // xyz is not 0
+    bool rotates; // rot is not the identity
+    bool moves;   // xyz is not 0
 };
 
 struct Joint {
@@ -47,11 +47,11 @@ Fixed fixed_from(const double xyz[3], const double rot[9]) {
 
 // The moving frame of the recursion; vectors in its own coordinates.
 struct Frame {
-    Mat3 rot;    // frame -> base
-    Vec3 pos;    // origin in base
-    Vec3 omega;  // angular velocity
-    Vec3 alpha;  // angular acceleration
-    Vec3 accel;  // classical linear acceleration of the origin
+    Mat3 rot;   // frame -> base
+    Vec3 pos;   // origin in base
+    Vec3 omega; // angular velocity
+    Vec3 alpha; // angular acceleration
+    Vec3 accel; // classical linear acceleration of the origin
 };
 
 // Moves to a child frame rigidly attached at xyz (rot: child -> this).
@@ -82,13 +82,13 @@ Mat3 axis_angle(const Vec3 &k, Real q) {
 
 // The joint's own motion, in the joint frame (after its fixed origin).
 void apply_revolute(Frame &f, const Vec3 &k, Real q, Real qd, Real qdd) {
-    Mat3 m = axis_angle(k, q);  // moved frame -> joint frame
+    Mat3 m = axis_angle(k, q); // moved frame -> joint frame
     Vec3 w = f.omega + k * qd;
     Vec3 dw = f.alpha + k * qdd + f.omega.cross(k * qd);
     f.rot = f.rot * m;
     f.omega.noalias() = m.transpose() * w;
     f.alpha.noalias() = m.transpose() * dw;
-    f.accel = m.transpose() * f.accel;  // the origin does not move
+    f.accel = m.transpose() * f.accel; // the origin does not move
 }
 
 void apply_prismatic(Frame &f, const Vec3 &k, Real q, Real qd, Real qdd) {
@@ -102,13 +102,13 @@ void store(const Vec3 &v, loadid_real_t out[3]) {
     for (int i = 0; i < 3; ++i) out[i] = v(i);
 }
 
-}  // namespace
+} // namespace
 
 struct loadid_kin {
     int n;
     Joint joints[LOADID_MAX_JOINTS];
     Fixed tip;
-    Vec3 gravity;  // in the base frame
+    Vec3 gravity; // in the base frame
 };
 
 extern "C" int loadid_kin_create(const loadid_chain_t *chain, const double gravity[3],
@@ -132,9 +132,13 @@ extern "C" int loadid_kin_create(const loadid_chain_t *chain, const double gravi
     return 0;
 }
 
-extern "C" void loadid_kin_destroy(loadid_kin_t *kin) { delete kin; }
+extern "C" void loadid_kin_destroy(loadid_kin_t *kin) {
+    delete kin;
+}
 
-extern "C" int loadid_kin_num_joints(const loadid_kin_t *kin) { return kin ? kin->n : -EINVAL; }
+extern "C" int loadid_kin_num_joints(const loadid_kin_t *kin) {
+    return kin ? kin->n : -EINVAL;
+}
 
 extern "C" int loadid_kin_eval(const loadid_kin_t *kin, const loadid_real_t *q,
                                const loadid_real_t *qd, const loadid_real_t *qdd,

@@ -15,7 +15,8 @@ namespace linalg {
 // sweeps converge, and every rotation runs over contiguous columns.
 void svd_left(const Work &M, Square &U, Values &s) {
     const int m = static_cast<int>(M.cols()), n = static_cast<int>(M.rows());
-    Eigen::Matrix<Real, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kMaxCols, kMaxDim> X = M.transpose();
+    Eigen::Matrix<Real, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kMaxCols, kMaxDim> X =
+        M.transpose();
     Square V = Square::Identity(n, n);
     Values norm2(n);
     for (int j = 0; j < n; ++j) norm2(j) = X.col(j).squaredNorm();
@@ -48,7 +49,8 @@ void svd_left(const Work &M, Square &U, Values &s) {
                 rotated = true;
                 // The rotation that zeroes the (p, q) element of X^T X.
                 const Real zeta = (b - a) / (Real(2) * g);
-                const Real t = (zeta >= 0 ? Real(1) : Real(-1)) / (std::abs(zeta) + std::sqrt(Real(1) + zeta * zeta));
+                const Real t = (zeta >= 0 ? Real(1) : Real(-1)) /
+                               (std::abs(zeta) + std::sqrt(Real(1) + zeta * zeta));
                 const Real c = Real(1) / std::sqrt(Real(1) + t * t), sn = c * t;
                 t_max = std::max(t_max, std::abs(t));
                 for (int i = 0; i < m; ++i) {
@@ -67,7 +69,7 @@ void svd_left(const Work &M, Square &U, Values &s) {
             }
         }
         if (!rotated || t_max <= tiny) break;
-        for (int j = 0; j < n; ++j) norm2(j) = X.col(j).squaredNorm();  // refresh the running norms
+        for (int j = 0; j < n; ++j) norm2(j) = X.col(j).squaredNorm(); // refresh the running norms
     }
     s.resize(n);
     for (int j = 0; j < n; ++j) s(j) = X.col(j).norm();
@@ -99,5 +101,5 @@ void colpiv_qr(const Tall &H, Square &Q, Tall &R, Eigen::Matrix<int, LOADID_NROW
     perm = qr.colsPermutation().indices();
 }
 
-}  // namespace linalg
-}  // namespace loadid
+} // namespace linalg
+} // namespace loadid

@@ -12,8 +12,8 @@
 namespace loadid {
 namespace linalg {
 
-inline constexpr int kMaxDim = LOADID_MAX_PARAMS + 1;       // rows: n + 1
-inline constexpr int kMaxCols = kMaxDim + LOADID_NROWS;     // columns of Z, eq. (29)
+inline constexpr int kMaxDim = LOADID_MAX_PARAMS + 1;   // rows: n + 1
+inline constexpr int kMaxCols = kMaxDim + LOADID_NROWS; // columns of Z, eq. (29)
 
 using Work = BoundedMat<kMaxDim, kMaxCols>;
 using Square = BoundedMat<kMaxDim, kMaxDim>;
@@ -54,5 +54,5 @@ void householder_q(const Square &A, Square &Q, Values &r_diag);
 // full Q (rows x rows), R (upper triangle, rows x 6) and P's indices.
 void colpiv_qr(const Tall &H, Square &Q, Tall &R, Eigen::Matrix<int, LOADID_NROWS, 1> &perm);
 
-}  // namespace linalg
-}  // namespace loadid
+} // namespace linalg
+} // namespace loadid

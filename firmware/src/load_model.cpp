@@ -14,9 +14,11 @@ using namespace loadid;
 
 namespace {
 
-bool positive_finite(Real v) { return std::isfinite(v) && v > 0; }
+bool positive_finite(Real v) {
+    return std::isfinite(v) && v > 0;
+}
 
-Mat3 sym3(const Real v[6]) {  // [xx xy xz yy yz zz]
+Mat3 sym3(const Real v[6]) { // [xx xy xz yy yz zz]
     Mat3 I;
     I << v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5];
     return I;
@@ -41,7 +43,7 @@ Mat3 consistent_inertia(const Mat3 &Ic) {
     return s.trace() * Mat3::Identity() - s;
 }
 
-}  // namespace
+} // namespace
 
 extern "C" void loadid_model_config_default(loadid_model_config_t *cfg) {
     if (!cfg) return;
@@ -59,8 +61,7 @@ extern "C" int loadid_load_model(const loadid_real_t estimate[10], const loadid_
     if (!estimate || !std || !cfg || !out) return -EINVAL;
     if (!positive_finite(cfg->mass_rel_std) || !positive_finite(cfg->com_std) ||
         !positive_finite(cfg->inertia_rel_std) || !positive_finite(cfg->max_gyration) ||
-        !positive_finite(cfg->fallback_density) || !std::isfinite(cfg->min_snr) ||
-        cfg->min_snr < 0)
+        !positive_finite(cfg->fallback_density) || !std::isfinite(cfg->min_snr) || cfg->min_snr < 0)
         return -EINVAL;
     if (!all_finite(estimate, LOADID_NPHI)) return LOADID_E_NONFINITE;
     *out = loadid_load_model_t{};
@@ -85,15 +86,18 @@ extern "C" int loadid_load_model(const loadid_real_t estimate[10], const loadid_
 
     const Mat3 Is = sym3(estimate + 4);
     const Mat3 pa = c.squaredNorm() * Mat3::Identity() - c * c.transpose();
-    const Mat3 Ic_est = Is - m * pa;  // parallel-axis theorem
+    const Mat3 Ic_est = Is - m * pa; // parallel-axis theorem
     const Mat3 Ic_cons = consistent_inertia(Ic_est);
     if (id & LOADID_IDENT_COM) {
         Real smax = 0;
-        for (int i = 4; i < LOADID_NPHI; ++i) smax = std::isnan(std[i]) ? std[i] : std::max(smax, std[i]);
-        const Real scale = std::max(Ic_cons.trace() / Real(3), sphere_moment(m, cfg->fallback_density));
+        for (int i = 4; i < LOADID_NPHI; ++i)
+            smax = std::isnan(std[i]) ? std[i] : std::max(smax, std[i]);
+        const Real scale =
+            std::max(Ic_cons.trace() / Real(3), sphere_moment(m, cfg->fallback_density));
         const Real gyration = std::sqrt(std::max(Ic_cons.trace(), Real(0)) / (Real(2) * m));
         const bool stands_out = !snr || snr[2] >= cfg->min_snr;
-        if (within(smax, cfg->inertia_rel_std * scale) && gyration <= cfg->max_gyration && stands_out)
+        if (within(smax, cfg->inertia_rel_std * scale) && gyration <= cfg->max_gyration &&
+            stands_out)
             id |= LOADID_IDENT_INERTIA;
     }
     out->identified = id;
@@ -119,9 +123,13 @@ extern "C" int loadid_load_model(const loadid_real_t estimate[10], const loadid_
 
 extern "C" const char *loadid_ident_name(int bit) {
     switch (bit) {
-        case LOADID_IDENT_MASS: return "mass";
-        case LOADID_IDENT_COM: return "com";
-        case LOADID_IDENT_INERTIA: return "inertia";
-        default: return "?";
+        case LOADID_IDENT_MASS:
+            return "mass";
+        case LOADID_IDENT_COM:
+            return "com";
+        case LOADID_IDENT_INERTIA:
+            return "inertia";
+        default:
+            return "?";
     }
 }

@@ -16,7 +16,7 @@ extern "C" int loadid_regressor(const loadid_real_t spec[3], const loadid_real_t
         return LOADID_E_NONFINITE;
     Eigen::Map<Regressor<10>> out(A);
     out = regressor(Vec3(spec[0], spec[1], spec[2]), Vec3(omega[0], omega[1], omega[2]),
-                  Vec3(alpha[0], alpha[1], alpha[2]));
+                    Vec3(alpha[0], alpha[1], alpha[2]));
     return 0;
 }
 
@@ -34,7 +34,7 @@ extern "C" int loadid_regressor_with_offset(const loadid_real_t A[6 * 10],
     if (!A || !A16) return -EINVAL;
     Eigen::Map<Regressor<16>> out(A16);
     out.leftCols<10>() = ConstRegressorMap<10>(A);
-    out.rightCols<6>().setIdentity();  // [A E6]: y = A phi + o
+    out.rightCols<6>().setIdentity(); // [A E6]: y = A phi + o
     return 0;
 }
 
@@ -44,7 +44,8 @@ extern "C" int loadid_regressor_model(const loadid_real_t spec[3], const loadid_
     if (!A || (n_params != LOADID_NPHI && n_params != LOADID_NPHI_OFFSET)) return -EINVAL;
     loadid_real_t A10[LOADID_NROWS * LOADID_NPHI];
     int rc = loadid_regressor(spec, omega, alpha, A10);
-    if (rc == 0 && n_params == LOADID_NPHI && g_init) rc = loadid_regressor_add_zeroing(g_init, A10);
+    if (rc == 0 && n_params == LOADID_NPHI && g_init)
+        rc = loadid_regressor_add_zeroing(g_init, A10);
     if (rc != 0) return rc;
     if (n_params == LOADID_NPHI_OFFSET) return loadid_regressor_with_offset(A10, A);
     std::memcpy(A, A10, sizeof A10);

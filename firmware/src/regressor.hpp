@@ -41,4 +41,4 @@ inline Regressor<10> zeroing_term(const Vec3 &g) {
     return Z;
 }
 
-}  // namespace loadid
+} // namespace loadid

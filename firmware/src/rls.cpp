@@ -14,4 +14,4 @@ loadid_est *make_recursive_ls(const loadid_est_config_t &c) {
 template loadid_est *make_recursive_ls<LOADID_NPHI>(const loadid_est_config_t &);
 template loadid_est *make_recursive_ls<LOADID_NPHI_OFFSET>(const loadid_est_config_t &);
 
-}  // namespace loadid
+} // namespace loadid

@@ -25,7 +25,7 @@ namespace loadid {
 
 template <int N>
 class RecursiveLs final : public loadid_est {
-public:
+  public:
     explicit RecursiveLs(const loadid_est_config_t &c)
         : loadid_est(c),
           instrumental_(c.method == LOADID_METHOD_RIV),
@@ -42,10 +42,10 @@ public:
 
     void reset() override {
         phi_.setZero();
-        M_ = Eigen::Matrix<Real, N, N>::Identity() / cfg.p0;  // RIV: Sigma^-1
+        M_ = Eigen::Matrix<Real, N, N>::Identity() / cfg.p0; // RIV: Sigma^-1
         CC_.setZero();
         b_.setZero();
-        U_.setIdentity();                                     // RLS: Sigma = U D U^T
+        U_.setIdentity(); // RLS: Sigma = U D U^T
         D_.setConstant(cfg.p0);
         excitation_.reset();
         samples_ = 0;
@@ -55,7 +55,7 @@ public:
     int rescale(Real, Real, Real) override { return -ENOTSUP; }
 
     int update(const Real *a, const Real *c, const Real *y) override {
-        const ConstRegressorMap<N> B(a);  // data matrix (A_k, or B_k of RIV)
+        const ConstRegressorMap<N> B(a); // data matrix (A_k, or B_k of RIV)
         const Eigen::Map<const Vec6> yk(y);
         if (instrumental_)
             update_riv(B, ConstRegressorMap<N>(c), yk);
@@ -69,7 +69,8 @@ public:
     int estimate(Real *phi, loadid_est_info_t *info) const override {
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
-        const int rc = excitation_gate(excitation_, excitation_.noise_ratio(col_exact<N>(cfg)), cfg, samples_, info);
+        const int rc = excitation_gate(excitation_, excitation_.noise_ratio(col_exact<N>(cfg)), cfg,
+                                       samples_, info);
         if (rc) return rc;
         // RIV keeps M and b (information form): its phi is solved here,
         // when asked for, not after every sample.
@@ -80,16 +81,22 @@ public:
     }
 
     CovInput information(const Real *phi) const override {
-        return {instrumental_ ? CovKind::IV : CovKind::LS, N, excitation_.gram().data(),
-                excitation_.gram_torque().data(), excitation_.col_weight().data(), samples_, phi,
-                instrumental_ ? M_.data() : nullptr, instrumental_ ? CC_.data() : nullptr};
+        return {instrumental_ ? CovKind::IV : CovKind::LS,
+                N,
+                excitation_.gram().data(),
+                excitation_.gram_torque().data(),
+                excitation_.col_weight().data(),
+                samples_,
+                phi,
+                instrumental_ ? M_.data() : nullptr,
+                instrumental_ ? CC_.data() : nullptr};
     }
 
-private:
+  private:
     // Eqs. (17)-(19), one row h (variance r) at a time, Bierman's update.
     void update_rls_ud(const ConstRegressorMap<N> &A, const Vec6 &y) {
         // Forgetting: Sigma / lambda before the update (eq. 17 with lambda Lambda).
-        if (cfg.forgetting != Real(1)) D_ /= cfg.forgetting;  // x / 1 is x to the bit
+        if (cfg.forgetting != Real(1)) D_ /= cfg.forgetting; // x / 1 is x to the bit
         for (int row = 0; row < LOADID_NROWS; ++row) {
             const Vec<N> h = A.row(row).transpose();
             const Vec<N> f = U_.transpose().lazyProduct(h);
@@ -119,13 +126,13 @@ private:
     void update_riv(const ConstRegressorMap<N> &B, const ConstRegressorMap<N> &C, const Vec6 &y) {
         const Real lam = cfg.forgetting;
         const Eigen::Matrix<Real, N, 6> CtLi = C.transpose() * inv_lambda_.asDiagonal();
-        if (lam != Real(1)) {  // x * 1 is x to the bit
+        if (lam != Real(1)) { // x * 1 is x to the bit
             M_ = lam * M_;
             CC_ = lam * CC_;
             b_ = lam * b_;
         }
         M_.noalias() += CtLi.lazyProduct(B);
-        CC_.noalias() += CtLi.lazyProduct(C);  // C^T W C: the instruments' part of RIV's covariance
+        CC_.noalias() += CtLi.lazyProduct(C); // C^T W C: the instruments' part of RIV's covariance
         b_.noalias() += CtLi * y;
     }
 
@@ -141,4 +148,4 @@ private:
     int64_t samples_ = 0;
 };
 
-}  // namespace loadid
+} // namespace loadid

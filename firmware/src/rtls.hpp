@@ -34,14 +34,18 @@ class Rtls final : public loadid_est {
     static constexpr int kMaxInit = 3 * LOADID_NROWS;
     using MatU = Eigen::Matrix<Real, N1, N1>;
     using Block = Eigen::Matrix<Real, N1, LOADID_NROWS>;
-    static constexpr int kBlock = 4;  // samples per deferred update, at most
+    static constexpr int kBlock = 4; // samples per deferred update, at most
     using Pending = Eigen::Matrix<Real, N1, LOADID_NROWS * kBlock>;
 
-public:
+  public:
     explicit Rtls(const loadid_est_config_t &c)
-        : loadid_est(c), d_(row_weights(c)), t_(col_weights<N>(c)),
+        : loadid_est(c),
+          d_(row_weights(c)),
+          t_(col_weights<N>(c)),
           excitation_(d_, t_),
-          exact_((col_exact<N>(c).template head<N>().array() != Real(1)).any()) { reset(); }
+          exact_((col_exact<N>(c).template head<N>().array() != Real(1)).any()) {
+        reset();
+    }
 
     void reweight() override {
         d_ = row_weights(cfg);
@@ -81,7 +85,7 @@ public:
         linalg::Values l;
         const MatU G = excitation_.gram().template selfadjointView<Eigen::Lower>();
         linalg::sym_eigen(linalg::Square(G), V, l);
-        for (int j = 0; j < N1; ++j) {  // ascending eigenvalues: descending s
+        for (int j = 0; j < N1; ++j) { // ascending eigenvalues: descending s
             U_.col(j) = V.col(N - j);
             s_(j) = std::sqrt(std::max(l(N - j), Real(0)));
         }
@@ -143,11 +147,18 @@ public:
     }
 
     CovInput information(const Real *phi) const override {
-        return {CovKind::TLS, N, excitation_.gram().data(), excitation_.gram_torque().data(),
-                t_.data(), samples_, phi, nullptr, nullptr};
+        return {CovKind::TLS,
+                N,
+                excitation_.gram().data(),
+                excitation_.gram_torque().data(),
+                t_.data(),
+                samples_,
+                phi,
+                nullptr,
+                nullptr};
     }
 
-private:
+  private:
     // Eq. (24): SVD of the first 2-3 blocks (zero-padded to 18 columns,
     // which adds zero singular values and changes nothing else).
     void initial_svd() {
@@ -186,7 +197,8 @@ private:
             return s_(N) / s_(N - 1);
         }
         const bool passed = gate_at_ >= 0 && gate_ratio_ <= noise_ratio_bound<N>(cfg, gate_at_);
-        if (gate_at_ < 0 || (samples_ != gate_at_ && (!passed || samples_ - gate_at_ >= kGateEvery))) {
+        if (gate_at_ < 0 ||
+            (samples_ != gate_at_ && (!passed || samples_ - gate_at_ >= kGateEvery))) {
             gate_ratio_ = excitation_.noise_ratio(col_exact<N>(cfg));
             gate_at_ = samples_;
         }
@@ -216,7 +228,8 @@ private:
         constexpr int C = LOADID_NROWS * B;
         const int used = LOADID_NROWS * pending_count_;
         pending_.middleCols(used, C - used).setZero();
-        const Eigen::Matrix<Real, N1, C> L = U_.transpose().lazyProduct(pending_.template leftCols<C>());
+        const Eigen::Matrix<Real, N1, C> L =
+            U_.transpose().lazyProduct(pending_.template leftCols<C>());
         MatU Uz;
         Vec<N1> sz;
         brand_jacobi<N1, C>(s_, L, Uz, sz);
@@ -227,9 +240,9 @@ private:
 
     // Eqs. (25)-(35) for one block while M has rank r < N + 1.
     void brand_update(const Block &Nk) {
-        Block L = U_.transpose().lazyProduct(Nk);  // eq. (27); rows >= r are 0
-        MatU basis = U_;                // [U_k J_k], eq. (34)
-        linalg::Work Z = linalg::Work::Zero(N1, N1 + LOADID_NROWS);  // eq. (29), zero-padded
+        Block L = U_.transpose().lazyProduct(Nk);                   // eq. (27); rows >= r are 0
+        MatU basis = U_;                                            // [U_k J_k], eq. (34)
+        linalg::Work Z = linalg::Work::Zero(N1, N1 + LOADID_NROWS); // eq. (29), zero-padded
         // Eq. (28): the part of N_k outside span(U), projected twice
         // (classical Gram-Schmidt with re-orthogonalisation).
         Block H = Nk - U_.lazyProduct(L);
@@ -252,17 +265,17 @@ private:
         if (p > 0) {
             basis.middleCols(rank_, p) = Q.leftCols(p);
             for (int j = 0; j < LOADID_NROWS; ++j)
-                for (int i = 0; i < p; ++i) Z(rank_ + i, N1 + perm(j)) = R(i, j);  // G_k = R P^T
+                for (int i = 0; i < p; ++i) Z(rank_ + i, N1 + perm(j)) = R(i, j); // G_k = R P^T
         }
-        Z.topLeftCorner(N1, N1).diagonal() = s_;           // S_k
-        Z.template rightCols<LOADID_NROWS>().topRows(rank_) = L.topRows(rank_);  // L_k
+        Z.topLeftCorner(N1, N1).diagonal() = s_;                                // S_k
+        Z.template rightCols<LOADID_NROWS>().topRows(rank_) = L.topRows(rank_); // L_k
         // Eq. (30): only U' and S' are needed.
         linalg::Square Uz;
         linalg::Values sz;
         linalg::svd_left(Z, Uz, sz);
         rank_ += p;
-        U_.noalias() = basis.lazyProduct(Uz.template topLeftCorner<N1, N1>());  // eqs. (32) / (34)
-        s_ = sz;                    // eqs. (33) / (35)
+        U_.noalias() = basis.lazyProduct(Uz.template topLeftCorner<N1, N1>()); // eqs. (32) / (34)
+        s_ = sz;                                                               // eqs. (33) / (35)
         if (rank_ < N1) {
             U_.rightCols(N1 - rank_).setZero();
             s_.tail(N1 - rank_).setZero();
@@ -330,4 +343,4 @@ private:
     mutable int64_t gate_at_ = -1;
 };
 
-}  // namespace loadid
+} // namespace loadid

@@ -24,12 +24,14 @@ struct loadid_signals {
     // period, the last raw stamp (INT64_MIN: none yet).
     double pll_t, pll_period;
     int64_t pll_last_raw;
-    bool piece_ended;  // loadid_signals_end_piece since the last joint state
+    bool piece_ended; // loadid_signals_end_piece since the last joint state
 };
 
 namespace {
 
-bool valid_source(int s) { return s >= LOADID_SIGNALS_SENSOR && s <= LOADID_SIGNALS_MIXED; }
+bool valid_source(int s) {
+    return s >= LOADID_SIGNALS_SENSOR && s <= LOADID_SIGNALS_MIXED;
+}
 
 const char *const kNames[] = {nullptr, "sensor", "kf", "setpoint", "mixed"};
 
@@ -48,8 +50,7 @@ int stream_ready(const loadid_jf_t *jf, int64_t t_us, int64_t max_age_us) {
     // The distance in unsigned arithmetic: exact for any two int64 times,
     // so a corrupt stamp far away cannot wrap around into "fresh".
     uint64_t dist = t_us > last ? uint64_t(t_us) - uint64_t(last) : uint64_t(last) - uint64_t(t_us);
-    if (dist > uint64_t(max_age_us))
-        return LOADID_E_STALE;
+    if (dist > uint64_t(max_age_us)) return LOADID_E_STALE;
     return 0;
 }
 
@@ -98,12 +99,12 @@ int64_t regularise(loadid_signals *s, int64_t t_raw, bool commit) {
         const double err_k = double(t_raw) - (s->pll_t + k * period);
         if (period > 0 && std::abs(err) <= 0.5 * period) {
             t = pred + g * err;
-            period += g * g / 4 * err;  // critically damped
+            period += g * g / 4 * err; // critically damped
         } else if (k >= 2 && std::abs(err_k) <= 0.25 * period) {
             t = s->pll_t + k * period + g * err_k;
             period += g * g / 4 * err_k / k;
         } else if (measured > 0) {
-            period = measured;  // resynchronise: the raw stamp, the last interval
+            period = measured; // resynchronise: the raw stamp, the last interval
         }
     }
     const int64_t out = int64_t(std::llround(t));
@@ -126,7 +127,7 @@ int refuse(loadid_signals *s, int rc) {
     return rc;
 }
 
-}  // namespace
+} // namespace
 
 extern "C" int loadid_signal_source_parse(const char *name, loadid_signal_source_t *out) {
     if (!name || !out) return -EINVAL;
@@ -189,7 +190,9 @@ extern "C" int loadid_signals_reset(loadid_signals_t *s) {
     return 0;
 }
 
-extern "C" int loadid_signals_num_joints(const loadid_signals_t *s) { return s ? s->n : -EINVAL; }
+extern "C" int loadid_signals_num_joints(const loadid_signals_t *s) {
+    return s ? s->n : -EINVAL;
+}
 
 extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int num_joints,
                                           const loadid_real_t *position,
@@ -223,10 +226,10 @@ extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int
     return 0;
 }
 
-extern "C" int loadid_signals_at(loadid_signals_t *s, int64_t t_us,
-                                 const loadid_real_t jr3_spec[3],
+extern "C" int loadid_signals_at(loadid_signals_t *s, int64_t t_us, const loadid_real_t jr3_spec[3],
                                  const loadid_real_t jr3_alpha[3],
-                                 const loadid_real_t *exact_setpoint, loadid_regressor_input_t *motion,
+                                 const loadid_real_t *exact_setpoint,
+                                 loadid_regressor_input_t *motion,
                                  loadid_regressor_input_t *instruments) {
     if (!s) return -EINVAL;
     const loadid_signal_source_t src = s->cfg.source;
@@ -234,8 +237,8 @@ extern "C" int loadid_signals_at(loadid_signals_t *s, int64_t t_us,
     const bool uses_measured = src != LOADID_SIGNALS_SETPOINT;
     const bool uses_setpoint = src == LOADID_SIGNALS_SETPOINT || instruments;
     if (uses_jr3 && (!jr3_spec || (src == LOADID_SIGNALS_SENSOR && !jr3_alpha))) return -EINVAL;
-    if (uses_jr3 && (!all_finite(jr3_spec, 3) ||
-                     (src == LOADID_SIGNALS_SENSOR && !all_finite(jr3_alpha, 3))))
+    if (uses_jr3 &&
+        (!all_finite(jr3_spec, 3) || (src == LOADID_SIGNALS_SENSOR && !all_finite(jr3_alpha, 3))))
         return refuse(s, LOADID_E_NONFINITE);
     if (exact_setpoint && !all_finite(exact_setpoint, 3 * s->n))
         return refuse(s, LOADID_E_NONFINITE);
@@ -263,8 +266,12 @@ extern "C" int loadid_signals_at(loadid_signals_t *s, int64_t t_us,
                 copy3(motion->omega, meas.omega);
                 copy3(motion->alpha, jr3_alpha);
                 break;
-            case LOADID_SIGNALS_KF: motion_of(meas, *motion); break;
-            case LOADID_SIGNALS_SETPOINT: motion_of(set, *motion); break;
+            case LOADID_SIGNALS_KF:
+                motion_of(meas, *motion);
+                break;
+            case LOADID_SIGNALS_SETPOINT:
+                motion_of(set, *motion);
+                break;
             case LOADID_SIGNALS_MIXED:
                 copy3(motion->spec, jr3_spec);
                 copy3(motion->omega, meas.omega);

@@ -13,8 +13,8 @@ namespace loadid {
 template <int N>
 struct TlsSolution {
     Vec<N> phi;
-    int multiplicity;  // p: how many singular values equal the smallest
-    int status;        // 0 or LOADID_E_NO_SOLUTION
+    int multiplicity; // p: how many singular values equal the smallest
+    int status;       // 0 or LOADID_E_NO_SOLUTION
 };
 
 // W: (N+1) x (N+1) orthonormal, columns by descending s; t: column weights.
@@ -64,4 +64,4 @@ TlsSolution<N> tls_solution(const Eigen::Matrix<Real, N + 1, N + 1> &W, const Ve
     return out;
 }
 
-}  // namespace loadid
+} // namespace loadid

@@ -35,7 +35,7 @@ bool spd_inverse(const Md &S, Md &inv) {
     return true;
 }
 
-}  // namespace
+} // namespace
 
 int covariance_std(const CovInput &in, Real *std, Real *scale) {
     const int n = in.n, n1 = n + 1;
@@ -112,7 +112,8 @@ int weakest_direction(const CovInput &in, Real *dir, Real *ratio) {
         big = std::max(big, std::abs(v(j)));
     }
     for (int j = 0; j < n; ++j) dir[j] = static_cast<Real>(big > 0 ? v(j) / big : 0);
-    if (ratio) *ratio = static_cast<Real>(l(n - 1) > 0 ? std::sqrt(std::max(l(0), 0.0) / l(n - 1)) : 0);
+    if (ratio)
+        *ratio = static_cast<Real>(l(n - 1) > 0 ? std::sqrt(std::max(l(0), 0.0) / l(n - 1)) : 0);
     return 0;
 }
 
@@ -123,18 +124,20 @@ int group_snr(const CovInput &in, Real snr[3]) {
     if (!(rows > 0)) return LOADID_E_NOT_EXCITED;
     Vd t(n1);
     for (int j = 0; j < n1; ++j) t(j) = static_cast<double>(in.t[j]);
-    const Md g = t.cwiseInverse().asDiagonal() * symmetric(in.gram, n1) * t.cwiseInverse().asDiagonal();
+    const Md g =
+        t.cwiseInverse().asDiagonal() * symmetric(in.gram, n1) * t.cwiseInverse().asDiagonal();
     const int first[3] = {0, 1, 4}, count[3] = {1, 3, 6};
-    const double share[3] = {1.0, 1.0, 0.5};  // the inertia reaches the torque rows only
+    const double share[3] = {1.0, 1.0, 0.5}; // the inertia reaches the torque rows only
     for (int grp = 0; grp < 3; ++grp) {
         double e = 0;
         for (int i = 0; i < count[grp]; ++i)
             for (int j = 0; j < count[grp]; ++j)
-                e += static_cast<double>(in.phi[first[grp] + i]) * g(first[grp] + i, first[grp] + j) *
+                e += static_cast<double>(in.phi[first[grp] + i]) *
+                     g(first[grp] + i, first[grp] + j) *
                      static_cast<double>(in.phi[first[grp] + j]);
         snr[grp] = static_cast<Real>(std::sqrt(std::max(e, 0.0) / (rows * share[grp])));
     }
     return 0;
 }
 
-}  // namespace loadid
+} // namespace loadid

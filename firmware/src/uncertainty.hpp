@@ -29,15 +29,15 @@ enum class CovKind { LS, IV, TLS };
 
 struct CovInput {
     CovKind kind;
-    int n;                 // parameters (10 or 16)
-    const Real *gram;      // (n+1) x (n+1) column-major, lower triangle: sum of
-                           // (D [A y] T)^T (D [A y] T)
+    int n;                   // parameters (10 or 16)
+    const Real *gram;        // (n+1) x (n+1) column-major, lower triangle: sum of
+                             // (D [A y] T)^T (D [A y] T)
     const Real *gram_torque; // the same over the torque rows only
-    const Real *t;         // the n + 1 column weights T
-    int64_t samples;       // k: 6 k rows
-    const Real *phi;       // the method's estimate (n values)
-    const Real *iv_m;      // IV: n x n column-major C^T W A, else nullptr
-    const Real *iv_cc;     // IV: n x n column-major C^T W C, else nullptr
+    const Real *t;           // the n + 1 column weights T
+    int64_t samples;         // k: 6 k rows
+    const Real *phi;         // the method's estimate (n values)
+    const Real *iv_m;        // IV: n x n column-major C^T W A, else nullptr
+    const Real *iv_cc;       // IV: n x n column-major C^T W C, else nullptr
 };
 
 // Fills std (n values) and *scale (s). Returns 0, or LOADID_E_NOT_EXCITED
@@ -51,4 +51,4 @@ int group_snr(const CovInput &in, Real snr[3]);
 // loadid_est_weakest_direction (in.gram, in.t, in.samples).
 int weakest_direction(const CovInput &in, Real *dir, Real *ratio);
 
-}  // namespace loadid
+} // namespace loadid

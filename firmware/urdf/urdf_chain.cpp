@@ -23,7 +23,7 @@ namespace {
 // Collects urdfdom's error messages (it logs them through console_bridge
 // and returns only a null model) so the caller gets the cause.
 class Capture : public console_bridge::OutputHandler {
-public:
+  public:
     std::string first_error;
     void log(const std::string &text, console_bridge::LogLevel level, const char *, int) override {
         if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR && first_error.empty())
@@ -46,7 +46,7 @@ Transform from_pose(const urdf::Pose &pose) {
     double x = pose.rotation.x, y = pose.rotation.y, z = pose.rotation.z, w = pose.rotation.w;
     double n = x * x + y * y + z * z + w * w;
     if (!(n > 0) || !std::isfinite(n)) throw Fail{LOADID_E_MODEL, "a joint origin is not finite"};
-    double s = 2.0 / n;  // the unit-quaternion rotation matrix, normalised
+    double s = 2.0 / n; // the unit-quaternion rotation matrix, normalised
     Transform t;
     t.r[0] = 1 - s * (y * y + z * z);
     t.r[1] = s * (x * y - z * w);
@@ -87,9 +87,12 @@ void copy_name(char *dst, const std::string &src, const char *what) {
 
 const char *type_name(int type) {
     switch (type) {
-        case urdf::Joint::FLOATING: return "floating";
-        case urdf::Joint::PLANAR: return "planar";
-        default: return "unknown-type";
+        case urdf::Joint::FLOATING:
+            return "floating";
+        case urdf::Joint::PLANAR:
+            return "planar";
+        default:
+            return "unknown-type";
     }
 }
 
@@ -102,7 +105,7 @@ void fill_joint(const urdf::Joint &j, const Transform &origin, loadid_joint_desc
     double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
     if (!(n > 1e-12) || !std::isfinite(n))
         throw Fail{LOADID_E_MODEL, "joint '" + j.name + "' has a zero or non-finite axis"};
-    for (int i = 0; i < 3; ++i) d.axis[i] = a[i] / n;  // URDF asks for unit axes; be lenient
+    for (int i = 0; i < 3; ++i) d.axis[i] = a[i] / n; // URDF asks for unit axes; be lenient
     const double inf = std::numeric_limits<double>::infinity();
     d.lower = -inf;
     d.upper = inf;
@@ -112,7 +115,7 @@ void fill_joint(const urdf::Joint &j, const Transform &origin, loadid_joint_desc
             d.lower = j.limits->lower;
             d.upper = j.limits->upper;
         }
-        if (j.limits->velocity > 0) d.velocity = j.limits->velocity;  // 0: not given
+        if (j.limits->velocity > 0) d.velocity = j.limits->velocity; // 0: not given
         if (std::isnan(d.lower) || std::isnan(d.upper) || !(d.lower <= d.upper))
             throw Fail{LOADID_E_MODEL, "joint '" + j.name + "' has limits lower > upper"};
     }
@@ -121,42 +124,46 @@ void fill_joint(const urdf::Joint &j, const Transform &origin, loadid_joint_desc
 void build_chain(const urdf::ModelInterface &model, const char *base, const char *sensor,
                  loadid_chain_t &chain) {
     urdf::LinkConstSharedPtr tip = model.getLink(sensor);
-    if (!tip) throw Fail{LOADID_E_MODEL, std::string("no link named '") + sensor + "' (robot.sensor_link)"};
+    if (!tip)
+        throw Fail{LOADID_E_MODEL,
+                   std::string("no link named '") + sensor + "' (robot.sensor_link)"};
     if (!model.getLink(base))
         throw Fail{LOADID_E_MODEL, std::string("no link named '") + base + "' (robot.base_link)"};
     // urdfdom 3.0 keeps only the last of two parents of a link, so a loop
     // closed by a second joint onto a link would otherwise look like a tree
     // (and the walk below could go round it for ever).
-    std::map<std::string, std::string> parent_of;  // child link -> joint
+    std::map<std::string, std::string> parent_of; // child link -> joint
     for (const auto &entry : model.joints_) {
         const urdf::Joint &j = *entry.second;
         auto seen = parent_of.emplace(j.child_link_name, j.name);
         if (!seen.second)
-            throw Fail{LOADID_E_MODEL, "link '" + j.child_link_name + "' has two parents (joints '" +
-                                           seen.first->second + "' and '" + j.name +
-                                           "'): a kinematic loop, not a tree"};
+            throw Fail{LOADID_E_MODEL, "link '" + j.child_link_name +
+                                           "' has two parents (joints '" + seen.first->second +
+                                           "' and '" + j.name + "'): a kinematic loop, not a tree"};
     }
     // Walk up from the sensor; the joints come out in sensor-to-base order.
     std::vector<urdf::JointConstSharedPtr> path;
     for (urdf::LinkConstSharedPtr link = tip; link->name != base; link = link->getParent()) {
         if (!link->parent_joint || !link->getParent() || path.size() > model.links_.size())
-            throw Fail{LOADID_E_MODEL, std::string("link '") + base +
-                                           "' is not an ancestor of '" + sensor + "'"};
+            throw Fail{LOADID_E_MODEL,
+                       std::string("link '") + base + "' is not an ancestor of '" + sensor + "'"};
         path.push_back(link->parent_joint);
     }
     std::memset(&chain, 0, sizeof chain);
     copy_name(chain.base_link, base, "link");
     copy_name(chain.sensor_link, sensor, "link");
-    Transform pending;  // fixed joints so far, folded into the next transform
+    Transform pending; // fixed joints so far, folded into the next transform
     int n = 0;
     for (auto it = path.rbegin(); it != path.rend(); ++it) {
         const urdf::Joint &j = **it;
         pending = compose(pending, from_pose(j.parent_to_joint_origin_transform));
         switch (j.type) {
-            case urdf::Joint::FIXED: continue;
+            case urdf::Joint::FIXED:
+                continue;
             case urdf::Joint::REVOLUTE:
             case urdf::Joint::CONTINUOUS:
-            case urdf::Joint::PRISMATIC: break;
+            case urdf::Joint::PRISMATIC:
+                break;
             default:
                 throw Fail{LOADID_E_MODEL, "joint '" + j.name + "' on the chain is " +
                                                type_name(j.type) +
@@ -171,8 +178,8 @@ void build_chain(const urdf::ModelInterface &model, const char *base, const char
         pending = Transform();
     }
     if (n == 0)
-        throw Fail{LOADID_E_MODEL, std::string("no movable joint between '") + base + "' and '" +
-                                       sensor + "'"};
+        throw Fail{LOADID_E_MODEL,
+                   std::string("no movable joint between '") + base + "' and '" + sensor + "'"};
     chain.num_joints = n;
     std::memcpy(chain.tip_xyz, pending.p, sizeof chain.tip_xyz);
     std::memcpy(chain.tip_rot, pending.r, sizeof chain.tip_rot);
@@ -202,7 +209,7 @@ void report(char *err, size_t errlen, const char *name, const std::string &why) 
         if (static_cast<unsigned char>(*c) < 0x20 || *c == 0x7f) *c = '?';
 }
 
-}  // namespace
+} // namespace
 
 extern "C" int loadid_urdf_load_string(const char *xml, const char *name, const char *base_link,
                                        const char *sensor_link, loadid_chain_t *chain, char *err,
@@ -228,10 +235,9 @@ extern "C" int loadid_urdf_load_string(const char *xml, const char *name, const 
         urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(text);
         ReleaseLinks release{model};
         if (!model) {
-            throw Fail{LOADID_E_MODEL,
-                       "not a valid URDF: " +
-                           (capture.first_error.empty() ? std::string("parse failed")
-                                                        : capture.first_error)};
+            throw Fail{LOADID_E_MODEL, "not a valid URDF: " + (capture.first_error.empty()
+                                                                   ? std::string("parse failed")
+                                                                   : capture.first_error)};
         }
         build_chain(*model, base_link, sensor_link, *chain);
     } catch (const Fail &f) {

@@ -67,9 +67,9 @@
 #include "gram_tls.h"
 #endif
 
-#define NPAR LOADID_NPHI             /* 10-parameter model with zeroing */
-#define BATCH_REPS 200               /* timed TLS_BATCH estimates per point */
-#define MAX_CALLS 10000000L          /* reps * samples: bounds the time buffer */
+#define NPAR LOADID_NPHI    /* 10-parameter model with zeroing */
+#define BATCH_REPS 200      /* timed TLS_BATCH estimates per point */
+#define MAX_CALLS 10000000L /* reps * samples: bounds the time buffer */
 
 static const char *prog = "bench_core";
 
@@ -77,7 +77,7 @@ static const char *prog = "bench_core";
 static const double kTargetMedianUs = 10.0; /* the RTLS update's mean per sample */
 static const double kTargetP999Us = 40.0;
 static const double kTargetRatio = 100.0;
-static const double kTargetLiveUs = 5.0;        /* RTLS update+estimate, median */
+static const double kTargetLiveUs = 5.0; /* RTLS update+estimate, median */
 #ifdef LOADID_BENCH_SHORTCUT
 static const double kTargetShortcutRatio = 1.25; /* shortcut / RTLS, medians */
 #endif
@@ -98,10 +98,10 @@ static const uint64_t kSeed = 1;
 /* ---------------------------------------------------------------- data -- */
 
 typedef struct {
-    int n;                 /* samples */
-    loadid_real_t *A;      /* 6 x NPAR per sample, measured (noisy) state */
-    loadid_real_t *C;      /* 6 x NPAR per sample, exact state (RIV instruments) */
-    loadid_real_t *y;      /* 6 per sample, zeroed measured wrench */
+    int n;            /* samples */
+    loadid_real_t *A; /* 6 x NPAR per sample, measured (noisy) state */
+    loadid_real_t *C; /* 6 x NPAR per sample, exact state (RIV instruments) */
+    loadid_real_t *y; /* 6 per sample, zeroed measured wrench */
 } workload_t;
 
 static void workload_free(workload_t *w) {
@@ -160,7 +160,8 @@ static int workload_make(int n, workload_t *w) {
         loadid_real_t *C = w->C + (size_t)k * 6 * NPAR;
         loadid_real_t *y = w->y + (size_t)k * 6;
         if (loadid_regressor(sp, om, al, A) != 0 || loadid_regressor(tsp, tom, tal, C) != 0 ||
-            loadid_regressor_add_zeroing(g_init, A) != 0 || loadid_regressor_add_zeroing(g_init, C) != 0) {
+            loadid_regressor_add_zeroing(g_init, A) != 0 ||
+            loadid_regressor_add_zeroing(g_init, C) != 0) {
             workload_free(w);
             return -1;
         }
@@ -169,9 +170,15 @@ static int workload_make(int n, workload_t *w) {
     return 0;
 }
 
-static const loadid_real_t *wl_A(const workload_t *w, int k) { return w->A + (size_t)k * 6 * NPAR; }
-static const loadid_real_t *wl_C(const workload_t *w, int k) { return w->C + (size_t)k * 6 * NPAR; }
-static const loadid_real_t *wl_y(const workload_t *w, int k) { return w->y + (size_t)k * 6; }
+static const loadid_real_t *wl_A(const workload_t *w, int k) {
+    return w->A + (size_t)k * 6 * NPAR;
+}
+static const loadid_real_t *wl_C(const workload_t *w, int k) {
+    return w->C + (size_t)k * 6 * NPAR;
+}
+static const loadid_real_t *wl_y(const workload_t *w, int k) {
+    return w->y + (size_t)k * 6;
+}
 
 /* The default noise-ratio gate, read from the core before it is turned off. */
 static double default_max_noise_ratio = -1;
@@ -189,19 +196,22 @@ static int make_estimator(loadid_method_t method, int capacity, int exact, loadi
         cfg.max_noise_ratio = 1;
     }
     if (rc == 0)
-        rc = loadid_est_weights_from_noise(&cfg, (loadid_real_t)kNoise.sigma_f, (loadid_real_t)kNoise.sigma_tau,
-                                           (loadid_real_t)kNoise.sigma_spec, (loadid_real_t)kNoise.sigma_alpha,
-                                           (loadid_real_t)kNoise.sigma_omega, (loadid_real_t)kOmegaTyp);
+        rc = loadid_est_weights_from_noise(
+            &cfg, (loadid_real_t)kNoise.sigma_f, (loadid_real_t)kNoise.sigma_tau,
+            (loadid_real_t)kNoise.sigma_spec, (loadid_real_t)kNoise.sigma_alpha,
+            (loadid_real_t)kNoise.sigma_omega, (loadid_real_t)kOmegaTyp);
     /* exact: the state columns counted as exact, as loadidd weighs columns
      * from its joint filters (col_exact 1e3): the noise-ratio gate then
      * takes its own eigen-solve now and then (rtls.hpp). */
-    for (int j = 0; rc == 0 && exact && j < NPAR; ++j) cfg.col_weight[j] *= 1000, cfg.col_exact[j] = 1000;
+    for (int j = 0; rc == 0 && exact && j < NPAR; ++j)
+        cfg.col_weight[j] *= 1000, cfg.col_exact[j] = 1000;
     if (rc == 0) {
         cfg.batch_capacity = capacity;
         rc = loadid_est_create(&cfg, out);
     }
     if (rc != 0)
-        fprintf(stderr, "%s: cannot create %s: %s\n", prog, loadid_method_name(method), loadid_strerror(rc));
+        fprintf(stderr, "%s: cannot create %s: %s\n", prog, loadid_method_name(method),
+                loadid_strerror(rc));
     return rc;
 }
 
@@ -213,7 +223,9 @@ static int64_t clock_ns(clockid_t id) {
     return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
 }
 
-static int64_t now_ns(void) { return clock_ns(CLOCK_MONOTONIC); }
+static int64_t now_ns(void) {
+    return clock_ns(CLOCK_MONOTONIC);
+}
 
 static int cmp_i64(const void *a, const void *b) {
     const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
@@ -221,12 +233,12 @@ static int cmp_i64(const void *a, const void *b) {
 }
 
 typedef struct {
-    long n;          /* timed calls */
-    double mean;     /* [us] */
-    double median;   /* [us] */
-    double p999;     /* 99.9th percentile, nearest rank [us] */
-    double max;      /* [us] */
-    long slow;       /* calls over 1 ms slower than the median: the
+    long n;        /* timed calls */
+    double mean;   /* [us] */
+    double median; /* [us] */
+    double p999;   /* 99.9th percentile, nearest rank [us] */
+    double max;    /* [us] */
+    long slow;     /* calls over 1 ms slower than the median: the
                         signature of preemption by another process */
 } stats_t;
 
@@ -261,9 +273,9 @@ static stats_t timer_overhead(clockid_t id, int64_t *buf, long n) {
 
 typedef struct {
     stats_t st;
-    long update_errors;      /* updates that did not return 0 (should be none) */
+    long update_errors; /* updates that did not return 0 (should be none) */
     int last_update_rc;
-    int estimate_rc;         /* estimate after the last repetition */
+    int estimate_rc; /* estimate after the last repetition */
     loadid_real_t phi[NPAR];
     loadid_est_info_t info;
 } run_result_t;
@@ -271,8 +283,8 @@ typedef struct {
 /* Feeds the workload reps times (plus one untimed warm-up repetition),
  * timing every update (with_estimate: update followed by estimate) alone on
  * clock id. */
-static int run_recursive(loadid_method_t method, int with_estimate, clockid_t id, const workload_t *w, int reps,
-                         int64_t *buf, run_result_t *out) {
+static int run_recursive(loadid_method_t method, int with_estimate, clockid_t id,
+                         const workload_t *w, int reps, int64_t *buf, run_result_t *out) {
     memset(out, 0, sizeof *out);
     loadid_est_t *est = NULL;
     if (make_estimator(method, w->n, with_estimate == 3, &est) != 0) return -1;
@@ -322,9 +334,10 @@ static int run_shortcut(const workload_t *w, int reps, int64_t *buf, run_result_
     int rc = loadid_est_config_default(LOADID_METHOD_RTLS, NPAR, &cfg);
     if (rc == 0) {
         cfg.max_noise_ratio = 1;
-        rc = loadid_est_weights_from_noise(&cfg, (loadid_real_t)kNoise.sigma_f, (loadid_real_t)kNoise.sigma_tau,
-                                           (loadid_real_t)kNoise.sigma_spec, (loadid_real_t)kNoise.sigma_alpha,
-                                           (loadid_real_t)kNoise.sigma_omega, (loadid_real_t)kOmegaTyp);
+        rc = loadid_est_weights_from_noise(
+            &cfg, (loadid_real_t)kNoise.sigma_f, (loadid_real_t)kNoise.sigma_tau,
+            (loadid_real_t)kNoise.sigma_spec, (loadid_real_t)kNoise.sigma_alpha,
+            (loadid_real_t)kNoise.sigma_omega, (loadid_real_t)kOmegaTyp);
     }
     loadid_gram_tls_t *g = NULL;
     if (rc == 0) rc = loadid_gram_tls_create(&cfg, &g);
@@ -357,12 +370,12 @@ typedef struct {
     int npoints;
     int k[MAX_POINTS];
     stats_t st[MAX_POINTS];
-    stats_t cpu;               /* the last point on thread CPU time */
+    stats_t cpu; /* the last point on thread CPU time */
     int have_cpu;
     int rc[MAX_POINTS];
     long update_errors;
     int last_update_rc;
-    loadid_real_t phi[NPAR];   /* estimate at the last point */
+    loadid_real_t phi[NPAR]; /* estimate at the last point */
     loadid_est_info_t info;
 } batch_result_t;
 
@@ -418,7 +431,8 @@ static int run_batch(const workload_t *w, int have_cpu_clock, int64_t *buf, batc
 /* ------------------------------------------------------------- output -- */
 
 static void print_row(const char *name, const stats_t *s, const char *note) {
-    printf("  %-32s %9ld %11.3f %11.3f %11.3f %11.3f", name, s->n, s->mean, s->median, s->p999, s->max);
+    printf("  %-32s %9ld %11.3f %11.3f %11.3f %11.3f", name, s->n, s->mean, s->median, s->p999,
+           s->max);
     if (note && note[0]) printf("  %s", note);
     if (s->slow) printf("%s%ld calls > median + 1 ms", note && note[0] ? "; " : "  ", s->slow);
     printf("\n");
@@ -461,8 +475,8 @@ static void print_machine(int reps, int samples, const stats_t *tov, const stats
     const int have_res = clock_getres(CLOCK_MONOTONIC, &res) == 0;
 
     printf("%s: loadid core latency (RTLS after Kubus, Kroeger, Wahl, IROS 2008)\n", prog);
-    printf("  scalar     %s (loadid_real_t, %zu bytes)\n", loadid_scalar_is_float() ? "float" : "double",
-           sizeof(loadid_real_t));
+    printf("  scalar     %s (loadid_real_t, %zu bytes)\n",
+           loadid_scalar_is_float() ? "float" : "double", sizeof(loadid_real_t));
     printf("  machine    %ld CPUs online (%ld configured)", ncpu_onln, ncpu_conf);
     if (have_uname) printf(", %s %s %s", u.sysname, u.release, u.machine);
     printf("\n");
@@ -470,21 +484,30 @@ static void print_machine(int reps, int samples, const stats_t *tov, const stats
     if (load[0]) printf("  loadavg    %s (other processes share the CPUs: figures vary)\n", load);
     printf("  workload   load o1, default synthetic trajectory (seed %llu), %d samples at 1 kHz,\n",
            (unsigned long long)kSeed, samples);
-    printf("             %d parameters with zeroing (eqs. 7-9); noise f %.3g N, tau %.3g Nm, a-g %.3g m/s^2,\n", NPAR,
-           kNoise.sigma_f, kNoise.sigma_tau, kNoise.sigma_spec);
-    printf("             alpha %.3g rad/s^2, w %.3g rad/s; weights from the noise (omega_typ %.3g rad/s)\n",
-           kNoise.sigma_alpha, kNoise.sigma_omega, kOmegaTyp);
+    printf(
+        "             %d parameters with zeroing (eqs. 7-9); noise f %.3g N, tau %.3g Nm, a-g %.3g "
+        "m/s^2,\n",
+        NPAR, kNoise.sigma_f, kNoise.sigma_tau, kNoise.sigma_spec);
+    printf(
+        "             alpha %.3g rad/s^2, w %.3g rad/s; weights from the noise (omega_typ %.3g "
+        "rad/s)\n",
+        kNoise.sigma_alpha, kNoise.sigma_omega, kOmegaTyp);
     printf("  timing     CLOCK_MONOTONIC around each call");
-    if (have_res) printf(" (resolution %ld ns)", (long)res.tv_nsec + (long)res.tv_sec * 1000000000L);
+    if (have_res)
+        printf(" (resolution %ld ns)", (long)res.tv_nsec + (long)res.tv_sec * 1000000000L);
     printf(";\n             clock-pair overhead median %.3f us, included below", tov->median);
     if (tov_cpu) printf(" (thread CPU clock: %.3f us)", tov_cpu->median);
     printf("\n");
     loadid_est_config_t def;
     loadid_est_config_default(LOADID_METHOD_RTLS, NPAR, &def);
-    printf("  config     defaults (max_condition %.3g), weights from the noise, batch capacity = samples,\n"
-           "             noise-ratio gate off (max_noise_ratio 1; default %.3g) so that estimate() does its work\n",
-           (double)def.max_condition, (double)def.max_noise_ratio);
-    printf("  recursive  %d timed repetitions of the %d samples after 1 warm-up, reset between\n\n", reps, samples);
+    printf(
+        "  config     defaults (max_condition %.3g), weights from the noise, batch capacity = "
+        "samples,\n"
+        "             noise-ratio gate off (max_noise_ratio 1; default %.3g) so that estimate() "
+        "does its work\n",
+        (double)def.max_condition, (double)def.max_noise_ratio);
+    printf("  recursive  %d timed repetitions of the %d samples after 1 warm-up, reset between\n\n",
+           reps, samples);
 }
 
 static void usage(FILE *f) {
@@ -494,7 +517,8 @@ static void usage(FILE *f) {
             "  trajectory, noisy states and wrench, 10 parameters with zeroing) and prints\n"
             "  median, 99.9th percentile and max in microseconds, the batch TLS recomputation\n"
             "  cost, and whether the real-time targets are met. Always exits 0 once set up.\n"
-            "  --reps N     timed repetitions of the workload per recursive method, 1..1000 (default 20)\n"
+            "  --reps N     timed repetitions of the workload per recursive method, 1..1000 "
+            "(default 20)\n"
             "  --samples N  samples at 1 kHz, 10..100000 (default 1500: the paper's 1.5 s)\n"
             "  --help       this text\n",
             prog);
@@ -505,14 +529,17 @@ static int parse_int(const char *opt, const char *arg, long lo, long hi, int *ou
     errno = 0;
     const long v = strtol(arg, &end, 10);
     if (errno || !end || end == arg || *end || v < lo || v > hi) {
-        fprintf(stderr, "%s: %s must be an integer in %ld..%ld, not '%s'\n", prog, opt, lo, hi, arg);
+        fprintf(stderr, "%s: %s must be an integer in %ld..%ld, not '%s'\n", prog, opt, lo, hi,
+                arg);
         return -1;
     }
     *out = (int)v;
     return 0;
 }
 
-static const char *met(int ok) { return ok ? "met" : "NOT met"; }
+static const char *met(int ok) {
+    return ok ? "met" : "NOT met";
+}
 
 int main(int argc, char **argv) {
     if (argc > 0 && argv[0] && argv[0][0]) {
@@ -530,7 +557,9 @@ int main(int argc, char **argv) {
     opterr = 0; /* one-line errors of our own */
     while ((c = getopt_long(argc, argv, ":hr:n:", opts, NULL)) != -1) {
         switch (c) {
-            case 'h': usage(stdout); return 0;
+            case 'h':
+                usage(stdout);
+                return 0;
             case 'r':
                 if (parse_int("--reps", optarg, 1, 1000, &reps)) return 2;
                 break;
@@ -538,7 +567,8 @@ int main(int argc, char **argv) {
                 if (parse_int("--samples", optarg, 10, 100000, &samples)) return 2;
                 break;
             case ':':
-                fprintf(stderr, "%s: option '%s' needs a value (see --help)\n", prog, argv[optind - 1]);
+                fprintf(stderr, "%s: option '%s' needs a value (see --help)\n", prog,
+                        argv[optind - 1]);
                 return 2;
             default:
                 fprintf(stderr, "%s: unknown option '%s' (see --help)\n", prog, argv[optind - 1]);
@@ -605,14 +635,16 @@ int main(int argc, char **argv) {
         return 1;
     }
 #ifdef CLOCK_THREAD_CPUTIME_ID
-    if (have_cpu_clock && run_recursive(LOADID_METHOD_RTLS, 0, CLOCK_THREAD_CPUTIME_ID, &w, reps, buf, &rtls_cpu)) {
+    if (have_cpu_clock &&
+        run_recursive(LOADID_METHOD_RTLS, 0, CLOCK_THREAD_CPUTIME_ID, &w, reps, buf, &rtls_cpu)) {
         free(buf);
         workload_free(&w);
         return 1;
     }
 #endif
 
-    printf("  %-32s %9s %11s %11s %11s %11s\n", "figure [us per call]", "calls", "mean", "median", "p99.9", "max");
+    printf("  %-32s %9s %11s %11s %11s %11s\n", "figure [us per call]", "calls", "mean", "median",
+           "p99.9", "max");
     print_row("RTLS update", &rtls.st, NULL);
     print_row("RTLS update+estimate", &rtls_est.st, NULL);
     print_row("RTLS estimate, nothing waiting", &rtls_est_only.st, NULL);
@@ -631,10 +663,13 @@ int main(int argc, char **argv) {
     }
     const stats_t *bN = &batch.st[batch.npoints - 1];
     const double ratio = rtls_est.st.median > 0 ? bN->median / rtls_est.st.median : INFINITY;
-    printf("  %-32s %9s %11.1fx   (TLS_BATCH estimate @ k=%d %.3f us / RTLS update+estimate %.3f us)\n",
-           "ratio batch / RTLS (medians)", "", ratio, samples, bN->median, rtls_est.st.median);
+    printf(
+        "  %-32s %9s %11.1fx   (TLS_BATCH estimate @ k=%d %.3f us / RTLS update+estimate %.3f "
+        "us)\n",
+        "ratio batch / RTLS (medians)", "", ratio, samples, bN->median, rtls_est.st.median);
 #ifdef LOADID_BENCH_SHORTCUT
-    const double sc_ratio = rtls_est.st.median > 0 ? shortcut.st.median / rtls_est.st.median : INFINITY;
+    const double sc_ratio =
+        rtls_est.st.median > 0 ? shortcut.st.median / rtls_est.st.median : INFINITY;
     printf("  %-32s %9s %11.2fx   (Gram eigen shortcut %.3f us / RTLS update+estimate %.3f us)\n",
            "ratio shortcut / RTLS (medians)", "", sc_ratio, shortcut.st.median, rtls_est.st.median);
 #endif
@@ -647,7 +682,8 @@ int main(int argc, char **argv) {
             char name[64];
             snprintf(name, sizeof name, "TLS_BATCH estimate @ k=%d [CPU]", samples);
             print_row(name, &batch.cpu, NULL);
-            printf("  %-32s %9s %11.1fx   (TLS_BATCH median / RTLS update mean)\n", "ratio batch / RTLS [CPU]", "",
+            printf("  %-32s %9s %11.1fx   (TLS_BATCH median / RTLS update mean)\n",
+                   "ratio batch / RTLS [CPU]", "",
                    rtls_cpu.st.mean > 0 ? batch.cpu.median / rtls_cpu.st.mean : INFINITY);
         }
     }
@@ -663,7 +699,8 @@ int main(int argc, char **argv) {
         long errors;
         int last_error;
     } res[] = {
-        {"RTLS", rtls.estimate_rc, rtls.phi, &rtls.info, rtls.update_errors + rtls_est.update_errors,
+        {"RTLS", rtls.estimate_rc, rtls.phi, &rtls.info,
+         rtls.update_errors + rtls_est.update_errors,
          rtls.update_errors ? rtls.last_update_rc : rtls_est.last_update_rc},
         {"RLS", rls.estimate_rc, rls.phi, &rls.info, rls.update_errors, rls.last_update_rc},
         {"RIV", riv.estimate_rc, riv.phi, &riv.info, riv.update_errors, riv.last_update_rc},
@@ -675,15 +712,18 @@ int main(int argc, char **argv) {
     };
     for (size_t i = 0; i < sizeof res / sizeof res[0]; ++i) {
         if (res[i].rc != 0) {
-            printf("    %-9s no estimate: %s (kappa %.3g)\n", res[i].name, loadid_strerror(res[i].rc),
-                   (double)res[i].info->condition_number);
+            printf("    %-9s no estimate: %s (kappa %.3g)\n", res[i].name,
+                   loadid_strerror(res[i].rc), (double)res[i].info->condition_number);
         } else {
             const double m = (double)res[i].phi[0];
-            printf("    %-9s mass %.5f kg (error %.2f %%), m*c [%.5f %.5f %.5f] kg m, condition_number %.3g, noise ratio %.3f",
-                   res[i].name, m, 100.0 * fabs(m - m_true) / m_true, (double)res[i].phi[1], (double)res[i].phi[2],
-                   (double)res[i].phi[3], (double)res[i].info->condition_number,
-                   (double)res[i].info->noise_ratio);
-            if (res[i].info->sigma_min > 0) printf(", sigma_min %.4g", (double)res[i].info->sigma_min);
+            printf(
+                "    %-9s mass %.5f kg (error %.2f %%), m*c [%.5f %.5f %.5f] kg m, "
+                "condition_number %.3g, noise ratio %.3f",
+                res[i].name, m, 100.0 * fabs(m - m_true) / m_true, (double)res[i].phi[1],
+                (double)res[i].phi[2], (double)res[i].phi[3], (double)res[i].info->condition_number,
+                (double)res[i].info->noise_ratio);
+            if (res[i].info->sigma_min > 0)
+                printf(", sigma_min %.4g", (double)res[i].info->sigma_min);
             printf("\n");
         }
         if (res[i].errors)
@@ -694,32 +734,39 @@ int main(int argc, char **argv) {
     if (shortcut.estimate_rc == 0 && batch.rc[batch.npoints - 1] == 0) {
         double worst = 0;
         for (int j = 0; j < NPAR; ++j) {
-            const double b = (double)batch.phi[j], d = fabs((double)shortcut.phi[j] - b) / fmax(fabs(b), 1e-3);
+            const double b = (double)batch.phi[j],
+                         d = fabs((double)shortcut.phi[j] - b) / fmax(fabs(b), 1e-3);
             worst = d > worst ? d : worst;
         }
-        printf("    shortcut  vs TLS_BATCH: max rel diff of phi %.2e (the Gram matrix squares the condition number)\n",
-               worst);
+        printf(
+            "    shortcut  vs TLS_BATCH: max rel diff of phi %.2e (the Gram matrix squares the "
+            "condition number)\n",
+            worst);
     }
 #endif
-    printf("    RTLS      U re-orthogonalised %d times, ||U^T U - I|| %.3g\n", rtls.info.reorthogonalisations,
-           (double)rtls.info.orthogonality_error);
+    printf("    RTLS      U re-orthogonalised %d times, ||U^T U - I|| %.3g\n",
+           rtls.info.reorthogonalisations, (double)rtls.info.orthogonality_error);
     if (rtls.estimate_rc == 0)
-        printf("    (noise-ratio gate off for the benchmark; with the default max_noise_ratio %.3g the RTLS\n"
-               "     estimate would be %s)\n",
-               default_max_noise_ratio,
-               (double)rtls.info.noise_ratio > default_max_noise_ratio ? "rejected as not excited" : "accepted");
+        printf(
+            "    (noise-ratio gate off for the benchmark; with the default max_noise_ratio %.3g "
+            "the RTLS\n"
+            "     estimate would be %s)\n",
+            default_max_noise_ratio,
+            (double)rtls.info.noise_ratio > default_max_noise_ratio ? "rejected as not excited"
+                                                                    : "accepted");
 
     printf("\n  targets (%s core):\n", loadid_scalar_is_float() ? "float" : "double");
     char label[64];
     snprintf(label, sizeof label, "RTLS update mean <= %.0f us", kTargetMedianUs);
-    printf("    %-40s : %10.3f us  %s\n", label, rtls.st.mean, met(rtls.st.mean <= kTargetMedianUs));
+    printf("    %-40s : %10.3f us  %s\n", label, rtls.st.mean,
+           met(rtls.st.mean <= kTargetMedianUs));
     snprintf(label, sizeof label, "RTLS update p99.9 <= %.0f us", kTargetP999Us);
     printf("    %-40s : %10.3f us  %s\n", label, rtls.st.p999, met(rtls.st.p999 <= kTargetP999Us));
     snprintf(label, sizeof label, "batch TLS / RTLS @ k=%d >= %.0fx", samples, kTargetRatio);
     printf("    %-40s : %10.1f x   %s\n", label, ratio, met(ratio >= kTargetRatio));
     snprintf(label, sizeof label, "RTLS update+estimate median <= %.0f us", kTargetLiveUs);
-    printf("    %-40s : %10.3f us  %s   (the live loop at 1 kHz; p99.9 %.3f us)\n", label, rtls_est.st.median,
-           met(rtls_est.st.median <= kTargetLiveUs), rtls_est.st.p999);
+    printf("    %-40s : %10.3f us  %s   (the live loop at 1 kHz; p99.9 %.3f us)\n", label,
+           rtls_est.st.median, met(rtls_est.st.median <= kTargetLiveUs), rtls_est.st.p999);
     snprintf(label, sizeof label, "  the same, exact columns <= %.0f us", kTargetLiveUs);
     printf("    %-40s : %10.3f us  %s   (loadidd's weights for joint-filter columns)\n", label,
            rtls_exact.st.median, met(rtls_exact.st.median <= kTargetLiveUs));
@@ -728,8 +775,8 @@ int main(int argc, char **argv) {
     printf("    %-40s : %10.2f x   %s\n", label, sc_ratio, met(sc_ratio >= kTargetShortcutRatio));
 #endif
     if (have_cpu_clock)
-        printf("    (thread CPU clock, for reference: RTLS update mean %.3f us, p99.9 %.3f us)\n", rtls_cpu.st.mean,
-               rtls_cpu.st.p999);
+        printf("    (thread CPU clock, for reference: RTLS update mean %.3f us, p99.9 %.3f us)\n",
+               rtls_cpu.st.mean, rtls_cpu.st.p999);
 
     free(buf);
     workload_free(&w);

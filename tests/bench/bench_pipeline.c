@@ -126,10 +126,18 @@ static event_t *load_events(const char *dir, int *count, int64_t *last) {
 
 static void feed_one(loadid_pipeline_t *p, const event_t *e) {
     switch (e->kind) {
-        case LOADID_REC_CAN: loadid_pipeline_can_frame(p, &e->can); break;
-        case LOADID_REC_BAD_LINE: loadid_pipeline_bad_frame(p); break;
-        case 0: loadid_pipeline_joint_state(p, e->t_us, e->num_joints, e->position, e->setpoint); break;
-        default: loadid_pipeline_command(p, e->t_us, e->action, e->load_name); break;
+        case LOADID_REC_CAN:
+            loadid_pipeline_can_frame(p, &e->can);
+            break;
+        case LOADID_REC_BAD_LINE:
+            loadid_pipeline_bad_frame(p);
+            break;
+        case 0:
+            loadid_pipeline_joint_state(p, e->t_us, e->num_joints, e->position, e->setpoint);
+            break;
+        default:
+            loadid_pipeline_command(p, e->t_us, e->action, e->load_name);
+            break;
     }
 }
 
@@ -145,8 +153,8 @@ static void note_state(void *ctx, int64_t utime, int state, const char *reason) 
 
 /* The estimation window alone: the time from feeding START until the
  * pipeline is DONE (or the events end); *seconds and *used. */
-static int window_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
-                      const event_t *evs, int n, int64_t last, double *seconds, int64_t *used) {
+static int window_run(const loadid_config_t *cfg, const loadid_chain_t *chain, const event_t *evs,
+                      int n, int64_t last, double *seconds, int64_t *used) {
     loadid_pipeline_t *p = NULL;
     char err[1024];
     int state = LOADID_STATE_IDLE;
@@ -156,7 +164,8 @@ static int window_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         return 1;
     }
     int i = 0;
-    while (i < n && !(evs[i].kind == -1 && evs[i].action == LOADID_CMD_START)) feed_one(p, &evs[i++]);
+    while (i < n && !(evs[i].kind == -1 && evs[i].action == LOADID_CMD_START))
+        feed_one(p, &evs[i++]);
     const double t0 = now_s();
     for (; i < n; ++i) { /* START acts once the joints cover it (the fixed lag) */
         feed_one(p, &evs[i]);
@@ -199,10 +208,11 @@ static int timed_run(const loadid_config_t *cfg, const loadid_chain_t *chain, co
 
 int main(int argc, char **argv) {
     if (argc == 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
-        printf("usage: bench_pipeline CONFIG RECORDING_DIR [REPETITIONS]\n"
-               "Times the service's per-sample path over a recording (REPETITIONS runs,\n"
-               "default 20): in memory, as loadidd --offline, the window from START to DONE\n"
-               "and REFINED's cost at DONE; prints the medians and the peak memory.\n");
+        printf(
+            "usage: bench_pipeline CONFIG RECORDING_DIR [REPETITIONS]\n"
+            "Times the service's per-sample path over a recording (REPETITIONS runs,\n"
+            "default 20): in memory, as loadidd --offline, the window from START to DONE\n"
+            "and REFINED's cost at DONE; prints the medians and the peak memory.\n");
         return 0;
     }
     if (argc < 3) {
@@ -225,11 +235,13 @@ int main(int argc, char **argv) {
     /* other_cfg: the window with REFINED added, or without it when configured. */
     other_cfg = cfg;
     int has_refined = 0;
-    for (int m = 0; m < cfg.num_methods; ++m) has_refined |= cfg.methods[m] == LOADID_METHOD_REFINED;
+    for (int m = 0; m < cfg.num_methods; ++m)
+        has_refined |= cfg.methods[m] == LOADID_METHOD_REFINED;
     if (has_refined) {
         other_cfg.num_methods = 0;
         for (int m = 0; m < cfg.num_methods; ++m)
-            if (cfg.methods[m] != LOADID_METHOD_REFINED) other_cfg.methods[other_cfg.num_methods++] = cfg.methods[m];
+            if (cfg.methods[m] != LOADID_METHOD_REFINED)
+                other_cfg.methods[other_cfg.num_methods++] = cfg.methods[m];
     } else if (cfg.num_methods < LOADID_MAX_METHODS) {
         other_cfg.methods[other_cfg.num_methods++] = LOADID_METHOD_REFINED;
     }
@@ -238,7 +250,8 @@ int main(int argc, char **argv) {
     int64_t last = 0;
     event_t *evs = load_events(argv[2], &n, &last);
     double *mem = calloc((size_t)reps, sizeof *mem), *file = calloc((size_t)reps, sizeof *file);
-    double *win = calloc((size_t)reps, sizeof *win), *refined = calloc((size_t)reps, sizeof *refined);
+    double *win = calloc((size_t)reps, sizeof *win),
+           *refined = calloc((size_t)reps, sizeof *refined);
     if (!evs || !mem || !file || !win || !refined) return 1;
     int64_t win_used = 0, other_used = 0;
     loadid_pipeline_status_t st_mem, st_file;
@@ -262,24 +275,30 @@ int main(int argc, char **argv) {
     const double med = mem[reps / 2], fmed = file[reps / 2];
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
-    printf("bench_pipeline: %s, %d methods, signals %d, %d repetitions\n", argv[2],
-           cfg.num_methods, cfg.signals, reps);
+    printf("bench_pipeline: %s, %d methods, signals %d, %d repetitions\n", argv[2], cfg.num_methods,
+           cfg.signals, reps);
     printf("  samples per run           %lld (%lld estimated)\n", (long long)st_mem.samples_ok,
            (long long)st_mem.samples_used);
     printf("  pipeline median           %.0f estimated samples/s (min %.0f, max %.0f)\n", med,
            mem[0], mem[reps - 1]);
-    printf("  --offline median          %.0f estimated samples/s (files parsed too; %.2fx the "
-           "pipeline's time; target >= 150000: %s)\n", fmed, med / fmed,
-           fmed >= 150000 ? "met" : "NOT met");
-    printf("  1.5 s estimation at 1 kHz %.2f ms in the pipeline (target < 7.5 ms, >= 200000 "
-           "samples/s: %s)\n", 1500 / med * 1e3, med >= 200000 ? "met" : "NOT met");
-    printf("  estimation window median  %.2f ms for %lld samples (%.1f s configured; "
-           "%.0f samples/s)\n", win[reps / 2] * 1e3, (long long)win_used, window_cfg.duration_s,
-           (double)win_used / win[reps / 2]);
-    printf("  REFINED at DONE           %.2f ms for %lld samples (median of the paired window "
-           "differences; p10 %.2f, p90 %.2f; target <= 20 ms: %s)\n", refined[reps / 2] * 1e3,
-           (long long)win_used, refined[reps / 10] * 1e3, refined[reps - 1 - reps / 10] * 1e3,
-           refined[reps / 2] <= 0.020 ? "met" : "NOT met");
+    printf(
+        "  --offline median          %.0f estimated samples/s (files parsed too; %.2fx the "
+        "pipeline's time; target >= 150000: %s)\n",
+        fmed, med / fmed, fmed >= 150000 ? "met" : "NOT met");
+    printf(
+        "  1.5 s estimation at 1 kHz %.2f ms in the pipeline (target < 7.5 ms, >= 200000 "
+        "samples/s: %s)\n",
+        1500 / med * 1e3, med >= 200000 ? "met" : "NOT met");
+    printf(
+        "  estimation window median  %.2f ms for %lld samples (%.1f s configured; "
+        "%.0f samples/s)\n",
+        win[reps / 2] * 1e3, (long long)win_used, window_cfg.duration_s,
+        (double)win_used / win[reps / 2]);
+    printf(
+        "  REFINED at DONE           %.2f ms for %lld samples (median of the paired window "
+        "differences; p10 %.2f, p90 %.2f; target <= 20 ms: %s)\n",
+        refined[reps / 2] * 1e3, (long long)win_used, refined[reps / 10] * 1e3,
+        refined[reps - 1 - reps / 10] * 1e3, refined[reps / 2] <= 0.020 ? "met" : "NOT met");
     printf("  peak resident memory      %.1f MB (target < 20 MB)\n", ru.ru_maxrss / 1024.0);
     free(mem);
     free(file);

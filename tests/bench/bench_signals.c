@@ -28,7 +28,7 @@
 #include "loadid/core.h"
 #include "loadid/urdf.h"
 
-#define SAMPLES 3000  /* 3 s at 1 kHz */
+#define SAMPLES 3000 /* 3 s at 1 kHz */
 #define REPS 20
 static const double kTargetStepUs = 5.0;
 static const double kGravity[3] = {0, 0, -9.81};
@@ -90,7 +90,7 @@ static int bench_robot(const char *path) {
     for (int k = 0; k < SAMPLES; ++k)
         for (int j = 0; j < n; ++j) {
             pos[k][j] = joint_pos(j, k * 1e-3, 1);
-            set[k][j] = joint_pos(j, k * 1e-3 + 0.002, 0);  /* servo lag of 2 ms */
+            set[k][j] = joint_pos(j, k * 1e-3 + 0.002, 0); /* servo lag of 2 ms */
         }
     const size_t calls = (size_t)SAMPLES * REPS;
     double *t_step = malloc(calls * sizeof *t_step), *t_fk = malloc(calls * sizeof *t_fk),
@@ -138,10 +138,11 @@ static int bench_robot(const char *path) {
 
 int main(int argc, char **argv) {
     if (argc == 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
-        printf("usage: bench_signals [URDF...]\n"
-               "Times the joint side of the pipeline per sample (Kalman filter banks, forward\n"
-               "kinematics, the signal sources) for each robot given (chains base_link ->\n"
-               "ft_sensor; default the RX60 and the 7-joint test robot) and prints a table.\n");
+        printf(
+            "usage: bench_signals [URDF...]\n"
+            "Times the joint side of the pipeline per sample (Kalman filter banks, forward\n"
+            "kinematics, the signal sources) for each robot given (chains base_link ->\n"
+            "ft_sensor; default the RX60 and the 7-joint test robot) and prints a table.\n");
         return 0;
     }
     for (int i = 1; i < argc; ++i)

@@ -16,23 +16,21 @@
 #include "fuzz_check.h"
 #include "loadid/candump.h"
 
-static bool known_code(int rc)
-{
+static bool known_code(int rc) {
     return rc == LOADID_CANDUMP_E_SYNTAX || rc == LOADID_CANDUMP_E_TIMESTAMP ||
            rc == LOADID_CANDUMP_E_IFNAME || rc == LOADID_CANDUMP_E_ID ||
            rc == LOADID_CANDUMP_E_DATA || rc == LOADID_CANDUMP_E_FD ||
            rc == LOADID_CANDUMP_E_REMOTE;
 }
 
-static bool same_frame(const loadid_can_frame_t *a, const loadid_can_frame_t *b)
-{
-    return a->id == b->id && a->dlc == b->dlc && a->extended == b->extended &&
-           a->t_us == b->t_us && memcmp(a->data, b->data, a->dlc) == 0;
+static bool same_frame(const loadid_can_frame_t *a, const loadid_can_frame_t *b) {
+    return a->id == b->id && a->dlc == b->dlc && a->extended == b->extended && a->t_us == b->t_us &&
+           memcmp(a->data, b->data, a->dlc) == 0;
 }
 
 /* Parses one line (NUL-terminated); checks the round trip when it parses. */
-static int parse_line(const char *line, loadid_can_frame_t *f, char ifname[LOADID_CANDUMP_IFNAME_MAX])
-{
+static int parse_line(const char *line, loadid_can_frame_t *f,
+                      char ifname[LOADID_CANDUMP_IFNAME_MAX]) {
     const int rc = loadid_candump_parse(line, f, ifname);
     if (rc != 0) {
         FUZZ_CHECK(known_code(rc));
@@ -58,8 +56,7 @@ typedef struct {
     size_t start, end;
 } span_t;
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
-{
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     if (size > 64 * 1024) {
         return 0; /* nothing new past a few lines; keeps runs fast */
     }

@@ -19,8 +19,7 @@
 
 #define NAME "/etc/loadid/loadid.yaml"
 
-static void check_line(const char *msg, size_t room)
-{
+static void check_line(const char *msg, size_t room) {
     const size_t n = strnlen(msg, room);
     FUZZ_CHECK(n < room);
     for (size_t i = 0; i < n; ++i) {
@@ -28,16 +27,14 @@ static void check_line(const char *msg, size_t room)
     }
 }
 
-static void on_warning(void *ctx, const char *msg)
-{
+static void on_warning(void *ctx, const char *msg) {
     int *count = ctx;
     ++*count;
     FUZZ_CHECK(strncmp(msg, NAME ":", strlen(NAME ":")) == 0);
     check_line(msg, 1 << 16);
 }
 
-static int finite_positive(const double *v, int n)
-{
+static int finite_positive(const double *v, int n) {
     for (int i = 0; i < n; ++i) {
         if (!isfinite(v[i]) || !(v[i] > 0)) return 0;
     }
@@ -46,8 +43,7 @@ static int finite_positive(const double *v, int n)
 
 #define TERMINATED(field) FUZZ_CHECK(strnlen(field, sizeof(field)) < sizeof(field))
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
-{
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     if (size > 256 * 1024) {
         return 0; /* a configuration is a few KB; keeps runs fast */
     }

@@ -18,8 +18,7 @@
 
 #define DATA_MAX 512
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
-{
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     if (size == 0) return 0; /* fmemopen wants a non-empty buffer */
     FILE *f = fmemopen((void *)data, size, "rb");
     if (!f) return 0;

@@ -23,16 +23,15 @@ typedef struct {
     int64_t fed, bad, sample, rejected, saturated, faulty, duplicate, full_scale;
 } tally_t;
 
-static void check_stats(const loadid_jr3_decoder_t *dec, const tally_t *t)
-{
+static void check_stats(const loadid_jr3_decoder_t *dec, const tally_t *t) {
     loadid_jr3_stats_t st;
     FUZZ_CHECK(loadid_jr3_decoder_stats(dec, &st) == 0);
     FUZZ_CHECK(st.frames_total == st.frames_bad + st.frames_sample + st.frames_duplicate +
                                       st.frames_discarded + st.full_scale_frames);
-    FUZZ_CHECK(st.frames_bad == st.frames_unknown_id + st.frames_bad_dlc +
-                                    st.frames_malformed + st.frames_reserved);
-    const int64_t open = st.samples_started - st.samples_ok - st.samples_rejected -
-                         st.samples_incomplete;
+    FUZZ_CHECK(st.frames_bad ==
+               st.frames_unknown_id + st.frames_bad_dlc + st.frames_malformed + st.frames_reserved);
+    const int64_t open =
+        st.samples_started - st.samples_ok - st.samples_rejected - st.samples_incomplete;
     FUZZ_CHECK(open == 0 || open == 1);
     FUZZ_CHECK(st.samples_saturated <= st.samples_rejected &&
                st.samples_faulty <= st.samples_rejected);
@@ -51,8 +50,7 @@ static void check_stats(const loadid_jr3_decoder_t *dec, const tally_t *t)
     FUZZ_CHECK(st.full_scale_changes == t->full_scale);
 }
 
-static void check_sample(const loadid_jr3_sample_t *s, int64_t t_first, int64_t t_now)
-{
+static void check_sample(const loadid_jr3_sample_t *s, int64_t t_first, int64_t t_now) {
     FUZZ_CHECK(s->t_us >= t_first && s->t_us <= t_now);
     bool saturated = false, faulty = false;
     for (int g = 0; g < LOADID_JR3_NUM_GROUPS; ++g) {
@@ -71,8 +69,7 @@ static void check_sample(const loadid_jr3_sample_t *s, int64_t t_first, int64_t 
     FUZZ_CHECK(s->saturated == saturated && s->faulty == faulty);
 }
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
-{
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     loadid_jr3_config_t cfg;
     loadid_jr3_config_default(&cfg);
     loadid_jr3_decoder_t *dec = NULL;
@@ -110,51 +107,52 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         const bool fs_changed = memcmp(fs_before, fs_after, sizeof fs_before) != 0;
         FUZZ_CHECK(fs_changed == (rc == LOADID_JR3_FULL_SCALE));
         switch (rc) {
-        case LOADID_JR3_NONE:
-            break;
-        case LOADID_JR3_SAMPLE:
-            ++t.sample;
-            check_sample(&out.sample, t_reset, t_us);
-            FUZZ_CHECK(!out.sample.saturated && !out.sample.faulty);
-            FUZZ_CHECK(out.sample.sequence == f.data[6]);
-            break;
-        case LOADID_JR3_FULL_SCALE: {
-            ++t.full_scale;
-            const int g = out.full_scale.group;
-            FUZZ_CHECK(g >= 0 && g < LOADID_JR3_NUM_GROUPS);
-            FUZZ_CHECK(f.id == LOADID_JR3_DEFAULT_BASE_ID + LOADID_JR3_FULL_SCALE_OFFSET);
-            FUZZ_CHECK(out.full_scale.t_us == t_us);
-            for (int k = 0; k < 3; ++k) {
-                FUZZ_CHECK(out.full_scale.previous[k] == fs_before[g][k]);
-                FUZZ_CHECK(out.full_scale.current[k] == fs_after[g][k]);
-                FUZZ_CHECK(out.full_scale.current[k] > 0 && isfinite(out.full_scale.current[k]));
+            case LOADID_JR3_NONE:
+                break;
+            case LOADID_JR3_SAMPLE:
+                ++t.sample;
+                check_sample(&out.sample, t_reset, t_us);
+                FUZZ_CHECK(!out.sample.saturated && !out.sample.faulty);
+                FUZZ_CHECK(out.sample.sequence == f.data[6]);
+                break;
+            case LOADID_JR3_FULL_SCALE: {
+                ++t.full_scale;
+                const int g = out.full_scale.group;
+                FUZZ_CHECK(g >= 0 && g < LOADID_JR3_NUM_GROUPS);
+                FUZZ_CHECK(f.id == LOADID_JR3_DEFAULT_BASE_ID + LOADID_JR3_FULL_SCALE_OFFSET);
+                FUZZ_CHECK(out.full_scale.t_us == t_us);
+                for (int k = 0; k < 3; ++k) {
+                    FUZZ_CHECK(out.full_scale.previous[k] == fs_before[g][k]);
+                    FUZZ_CHECK(out.full_scale.current[k] == fs_after[g][k]);
+                    FUZZ_CHECK(out.full_scale.current[k] > 0 &&
+                               isfinite(out.full_scale.current[k]));
+                }
+                break;
             }
-            break;
-        }
-        case LOADID_JR3_E_SATURATED:
-        case LOADID_JR3_E_FAULT:
-            ++t.rejected;
-            check_sample(&out.sample, t_reset, t_us);
-            if (rc == LOADID_JR3_E_FAULT) {
-                FUZZ_CHECK(out.sample.faulty);
-            } else {
-                FUZZ_CHECK(out.sample.saturated && !out.sample.faulty);
-                ++t.saturated;
-            }
-            if (out.sample.faulty) ++t.faulty;
-            break;
-        case LOADID_JR3_E_DUPLICATE:
-            ++t.duplicate;
-            break;
-        case LOADID_JR3_E_UNKNOWN_ID:
-        case LOADID_JR3_E_DLC:
-        case LOADID_JR3_E_MALFORMED:
-        case LOADID_JR3_E_RESERVED:
-            ++t.bad;
-            FUZZ_CHECK(strcmp(loadid_jr3_strerror(rc), loadid_jr3_strerror(-EINVAL)) != 0);
-            break;
-        default:
-            FUZZ_CHECK(!"a return code jr3.h does not document");
+            case LOADID_JR3_E_SATURATED:
+            case LOADID_JR3_E_FAULT:
+                ++t.rejected;
+                check_sample(&out.sample, t_reset, t_us);
+                if (rc == LOADID_JR3_E_FAULT) {
+                    FUZZ_CHECK(out.sample.faulty);
+                } else {
+                    FUZZ_CHECK(out.sample.saturated && !out.sample.faulty);
+                    ++t.saturated;
+                }
+                if (out.sample.faulty) ++t.faulty;
+                break;
+            case LOADID_JR3_E_DUPLICATE:
+                ++t.duplicate;
+                break;
+            case LOADID_JR3_E_UNKNOWN_ID:
+            case LOADID_JR3_E_DLC:
+            case LOADID_JR3_E_MALFORMED:
+            case LOADID_JR3_E_RESERVED:
+                ++t.bad;
+                FUZZ_CHECK(strcmp(loadid_jr3_strerror(rc), loadid_jr3_strerror(-EINVAL)) != 0);
+                break;
+            default:
+                FUZZ_CHECK(!"a return code jr3.h does not document");
         }
         check_stats(dec, &t);
     }

@@ -15,8 +15,7 @@
 #include "loadid/lcm_udpm.h"
 #include "loadid/lcm_wire.h"
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
-{
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     const char *channel = NULL;
     const uint8_t *payload = NULL;
     size_t len = 0;

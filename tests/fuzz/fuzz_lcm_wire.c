@@ -12,15 +12,13 @@
 #include "fuzz_check.h"
 #include "loadid/lcm_wire.h"
 
-static void check_code(int rc)
-{
+static void check_code(int rc) {
     FUZZ_CHECK(rc == 0 || rc == LOADID_LCM_NONFINITE || rc == LOADID_LCM_ESHORT ||
-               rc == LOADID_LCM_ELONG || rc == LOADID_LCM_EFINGERPRINT ||
-               rc == LOADID_LCM_ECOUNT || rc == LOADID_LCM_ESTRING);
+               rc == LOADID_LCM_ELONG || rc == LOADID_LCM_EFINGERPRINT || rc == LOADID_LCM_ECOUNT ||
+               rc == LOADID_LCM_ESTRING);
 }
 
-static int finite_all(const double *v, int n)
-{
+static int finite_all(const double *v, int n) {
     for (int i = 0; i < n; ++i) {
         if (!isfinite(v[i])) return 0;
     }
@@ -29,24 +27,23 @@ static int finite_all(const double *v, int n)
 
 /* rc of a decoder; when it took the message, the re-encoded bytes must be
  * the input's. */
-#define ROUND_TRIP(type, cap, decode, encode, nonfinite_expr)                  \
-    do {                                                                       \
-        type m;                                                                \
-        memset(&m, 0x5A, sizeof m);                                            \
-        const int rc = decode(data, size, &m);                                 \
-        check_code(rc);                                                        \
-        if (rc >= 0) {                                                         \
-            ++taken;                                                           \
-            FUZZ_CHECK((rc == LOADID_LCM_NONFINITE) == (nonfinite_expr));      \
-            uint8_t out[cap];                                                  \
-            const int n = encode(&m, out, sizeof out);                         \
+#define ROUND_TRIP(type, cap, decode, encode, nonfinite_expr)                       \
+    do {                                                                            \
+        type m;                                                                     \
+        memset(&m, 0x5A, sizeof m);                                                 \
+        const int rc = decode(data, size, &m);                                      \
+        check_code(rc);                                                             \
+        if (rc >= 0) {                                                              \
+            ++taken;                                                                \
+            FUZZ_CHECK((rc == LOADID_LCM_NONFINITE) == (nonfinite_expr));           \
+            uint8_t out[cap];                                                       \
+            const int n = encode(&m, out, sizeof out);                              \
             FUZZ_CHECK(n > 0 && (size_t)n == size && memcmp(out, data, size) == 0); \
-            FUZZ_CHECK(encode(&m, out, size - 1) == LOADID_LCM_ENOSPC);        \
-        }                                                                      \
+            FUZZ_CHECK(encode(&m, out, size - 1) == LOADID_LCM_ENOSPC);             \
+        }                                                                           \
     } while (0)
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
-{
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     int taken = 0;
     ROUND_TRIP(loadid_lcm_joint_state_t, LOADID_LCM_JOINT_STATE_MAX, loadid_lcm_decode_joint_state,
                loadid_lcm_encode_joint_state,

@@ -17,13 +17,11 @@
 #include "fuzz_check.h"
 #include "loadid/modbus_ft.h"
 
-static uint16_t be16(const uint8_t *b)
-{
+static uint16_t be16(const uint8_t *b) {
     return (uint16_t)(b[0] << 8 | b[1]);
 }
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
-{
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     double fs_force[3] = {200, 200, 200}, fs_moment[3] = {12, 12, 12};
     loadid_modbus_ft_decoder_t dec;
     FUZZ_CHECK(loadid_modbus_ft_decoder_init(&dec, fs_force, fs_moment) == 0);
@@ -38,7 +36,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             begun = false;
             continue;
         }
-        const size_t nregs = op == 2 ? LOADID_MODBUS_FT_HOLDING_COUNT : LOADID_MODBUS_FT_INPUT_COUNT;
+        const size_t nregs =
+            op == 2 ? LOADID_MODBUS_FT_HOLDING_COUNT : LOADID_MODBUS_FT_INPUT_COUNT;
         if (size - i < 2 * nregs) break;
         uint16_t regs[LOADID_MODBUS_FT_INPUT_COUNT];
         for (size_t k = 0; k < nregs; ++k) regs[k] = be16(data + i + 2 * k);
@@ -84,8 +83,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                     FUZZ_CHECK(rc == LOADID_MODBUS_FT_SAMPLE);
                     ++ok;
                 } else {
-                    FUZZ_CHECK(rc == (s.faulty ? LOADID_MODBUS_FT_E_FAULT
-                                               : LOADID_MODBUS_FT_E_SATURATED));
+                    FUZZ_CHECK(
+                        rc == (s.faulty ? LOADID_MODBUS_FT_E_FAULT : LOADID_MODBUS_FT_E_SATURATED));
                     ++rejected;
                 }
                 if (!(begun && counter == last)) {

@@ -22,27 +22,29 @@ extern "C" size_t __sanitizer_get_current_allocated_bytes() __attribute__((weak)
 // ignores what parseURDF allocates. So that this hides nothing of the
 // loader's own, the harness checks below that the heap in use is the same
 // after every load in which parseURDF returned a model.
-extern "C" const char *__lsan_default_suppressions() { return "leak:urdf::parseURDF\n"; }
+extern "C" const char *__lsan_default_suppressions() {
+    return "leak:urdf::parseURDF\n";
+}
 
 namespace {
 constexpr char kName[] = "robot.urdf";
-constexpr char kNotUrdf[] = "robot.urdf: not a valid URDF:";  // parseURDF gave no model
+constexpr char kNotUrdf[] = "robot.urdf: not a valid URDF:"; // parseURDF gave no model
 
 int load(const char *xml, loadid_chain_t *chain, char (&err)[512]) {
     return loadid_urdf_load_string(xml, kName, "base_link", "ft_sensor", chain, err, sizeof err);
 }
-}  // namespace
+} // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
-    if (size > 256 * 1024) return 0;  // a robot's URDF is a few KB; keeps runs fast
+    if (size > 256 * 1024) return 0; // a robot's URDF is a few KB; keeps runs fast
     static bool warm = false;
     loadid_chain_t chain;
     char err[512] = "";
-    if (!warm) {  // what the libraries allocate once (console_bridge, locales)
+    if (!warm) { // what the libraries allocate once (console_bridge, locales)
         load("<robot name='r'><link name='base_link'/></robot>", &chain, err);
         warm = true;
     }
-    const std::string xml(reinterpret_cast<const char *>(data), size);  // NUL-terminated
+    const std::string xml(reinterpret_cast<const char *>(data), size); // NUL-terminated
     std::memset(&chain, 0x5A, sizeof chain);
     err[0] = '\0';
     const size_t heap_before =
@@ -54,7 +56,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     FUZZ_CHECK(std::memchr(err, '\0', sizeof err) != nullptr);
     for (const char *c = err; *c; ++c) FUZZ_CHECK(static_cast<unsigned char>(*c) >= 0x20);
     const bool no_model = std::strncmp(err, kNotUrdf, sizeof kNotUrdf - 1) == 0;
-    if (!no_model) FUZZ_CHECK(heap_after == heap_before);  // the model was freed
+    if (!no_model) FUZZ_CHECK(heap_after == heap_before); // the model was freed
     if (rc != 0) {
         FUZZ_CHECK(rc == LOADID_E_MODEL);
         FUZZ_CHECK(std::strncmp(err, "robot.urdf: ", 12) == 0 && err[12] != '\0');

@@ -28,8 +28,7 @@ typedef struct {
     size_t n;
 } buf_t;
 
-static void put(buf_t *s, const void *p, size_t n)
-{
+static void put(buf_t *s, const void *p, size_t n) {
     if (s->n + n > sizeof s->b) {
         fprintf(stderr, "make_seeds: seed too large\n");
         exit(1);
@@ -38,8 +37,7 @@ static void put(buf_t *s, const void *p, size_t n)
     s->n += n;
 }
 
-static void write_seed(const char *target, const char *name, const buf_t *s)
-{
+static void write_seed(const char *target, const char *name, const buf_t *s) {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", root, target);
     if (mkdir(path, 0777) != 0 && errno != EEXIST) {
@@ -58,24 +56,21 @@ static void write_seed(const char *target, const char *name, const buf_t *s)
 /* ---- jr3: frames as fuzz_jr3.c reads them (id LE16 | bit 15 extended,
  * dlc, 8 data bytes) ---- */
 
-static void put_frame(buf_t *s, const loadid_can_frame_t *f)
-{
+static void put_frame(buf_t *s, const loadid_can_frame_t *f) {
     const uint16_t id = (uint16_t)((f->id & 0x7FFF) | (f->extended ? 0x8000u : 0));
     const uint8_t head[3] = {(uint8_t)id, (uint8_t)(id >> 8), f->dlc};
     put(s, head, 3);
     put(s, f->data, 8);
 }
 
-static void put_raw(buf_t *s, uint16_t id, uint8_t dlc, const uint8_t data[8])
-{
+static void put_raw(buf_t *s, uint16_t id, uint8_t dlc, const uint8_t data[8]) {
     const uint8_t head[3] = {(uint8_t)id, (uint8_t)(id >> 8), dlc};
     put(s, head, 3);
     put(s, data, 8);
 }
 
 /* A hanging load of 1.2 kg with its COM off the axis, swinging a little. */
-static void sample_values(int i, double v[LOADID_JR3_NUM_GROUPS][3])
-{
+static void sample_values(int i, double v[LOADID_JR3_NUM_GROUPS][3]) {
     const double a = 0.3 * sin(0.05 * i);
     const double f[3] = {1.2 * 9.81 * sin(a), 0.4 * cos(a), 1.2 * 9.81 * cos(a)};
     const double m[3] = {0.06 * cos(a), -0.09, 0.01 * sin(a)};
@@ -88,8 +83,7 @@ static void sample_values(int i, double v[LOADID_JR3_NUM_GROUPS][3])
 }
 
 static void put_sample(buf_t *s, const loadid_jr3_config_t *cfg, int i, uint8_t seq,
-                       unsigned faults, const int order[4])
-{
+                       unsigned faults, const int order[4]) {
     double v[LOADID_JR3_NUM_GROUPS][3];
     sample_values(i, v);
     loadid_can_frame_t fr[LOADID_JR3_NUM_GROUPS];
@@ -100,8 +94,7 @@ static void put_sample(buf_t *s, const loadid_jr3_config_t *cfg, int i, uint8_t 
     for (int g = 0; g < LOADID_JR3_NUM_GROUPS; ++g) put_frame(s, &fr[order ? order[g] : g]);
 }
 
-static void jr3_seeds(void)
-{
+static void jr3_seeds(void) {
     loadid_jr3_config_t cfg;
     loadid_jr3_config_default(&cfg);
     buf_t s = {.n = 0};
@@ -181,13 +174,11 @@ static void jr3_seeds(void)
 
 /* ---- candump: log lines as candump -l writes them, and edge cases ---- */
 
-static void put_text(buf_t *s, const char *t)
-{
+static void put_text(buf_t *s, const char *t) {
     put(s, t, strlen(t));
 }
 
-static void candump_seeds(void)
-{
+static void candump_seeds(void) {
     loadid_jr3_config_t cfg;
     loadid_jr3_config_default(&cfg);
     buf_t s = {.n = 0};
@@ -195,8 +186,8 @@ static void candump_seeds(void)
         double v[LOADID_JR3_NUM_GROUPS][3];
         sample_values(i, v);
         loadid_can_frame_t fr[LOADID_JR3_NUM_GROUPS];
-        loadid_jr3_encode(&cfg, (const double(*)[3])v, (uint8_t)i, 0,
-                          1700000000123456 + 1000 * i, fr);
+        loadid_jr3_encode(&cfg, (const double(*)[3])v, (uint8_t)i, 0, 1700000000123456 + 1000 * i,
+                          fr);
         for (int g = 0; g < LOADID_JR3_NUM_GROUPS; ++g) {
             char line[LOADID_CANDUMP_LINE_MAX];
             loadid_candump_format(&fr[g], "vcan0", line, sizeof line);
@@ -206,23 +197,23 @@ static void candump_seeds(void)
     write_seed("candump", "jr3_samples.log", &s);
 
     s.n = 0;
-    put_text(&s, "(0000000000.000000) can0 123#\n");           /* no data */
+    put_text(&s, "(0000000000.000000) can0 123#\n");              /* no data */
     put_text(&s, "(1700000000.000001) can0 1FFFFFFF#DEADBEEF\n"); /* extended */
     put_text(&s, "(1700000000.000002)   vcan10  1A0#01.02.03.04.05.06.07.08\r\n");
-    put_text(&s, "\n \t\r\n");                                    /* blank lines */
-    put_text(&s, "(1700000000.000003) can0 7FF#0102 \t\n");      /* trailing blanks */
-    put_text(&s, "(1700000000.000004) can0 123##1DEAD\n");       /* CAN FD */
-    put_text(&s, "(1700000000.000005) can0 123#R\n");            /* remote */
+    put_text(&s, "\n \t\r\n");                                            /* blank lines */
+    put_text(&s, "(1700000000.000003) can0 7FF#0102 \t\n");               /* trailing blanks */
+    put_text(&s, "(1700000000.000004) can0 123##1DEAD\n");                /* CAN FD */
+    put_text(&s, "(1700000000.000005) can0 123#R\n");                     /* remote */
     put_text(&s, "(1700000000.000006) can0 20000080#0000000000000000\n"); /* error frame */
-    put_text(&s, "(9223372036854.775807) can0 000#00\n");        /* the largest time */
-    put_text(&s, "(9223372036854.775808) can0 000#00\n");        /* one past it */
-    put_text(&s, "(1700000000.12345) can0 123#00\n");            /* 5 fraction digits */
+    put_text(&s, "(9223372036854.775807) can0 000#00\n");                 /* the largest time */
+    put_text(&s, "(9223372036854.775808) can0 000#00\n");                 /* one past it */
+    put_text(&s, "(1700000000.12345) can0 123#00\n");                     /* 5 fraction digits */
     put_text(&s, "(1700000000.000007) averyveryverylongname 123#00\n");
-    put_text(&s, "(1700000000.000008) can0 800#00\n");           /* 11 bits exceeded */
-    put_text(&s, "(1700000000.000009) can0 123#0.1\n");          /* misplaced '.' */
+    put_text(&s, "(1700000000.000008) can0 800#00\n");                 /* 11 bits exceeded */
+    put_text(&s, "(1700000000.000009) can0 123#0.1\n");                /* misplaced '.' */
     put_text(&s, "(1700000000.000010) can0 123#010203040506070809\n"); /* 9 bytes */
     put_text(&s, "(1700000000.000011) can0 1A0#");
-    for (int i = 0; i < 60; ++i) put_text(&s, "00"); /* longer than a line may be */
+    for (int i = 0; i < 60; ++i) put_text(&s, "00");                 /* longer than a line may be */
     put_text(&s, "\n(1700000000.000012) can0 1A0#0102030405060708"); /* no final newline */
     write_seed("candump", "edge_cases.log", &s);
 }
@@ -230,8 +221,7 @@ static void candump_seeds(void)
 /* ---- lcm_wire and lcm_udpm: messages from the encoders ---- */
 
 static void lcm_seed(const char *target, const char *name, const uint8_t *msg, int n,
-                     const char *channel)
-{
+                     const char *channel) {
     if (n <= 0) {
         fprintf(stderr, "make_seeds: LCM encode failed for %s\n", name);
         exit(1);
@@ -246,8 +236,7 @@ static void lcm_seed(const char *target, const char *name, const uint8_t *msg, i
     write_seed(target, name, &s);
 }
 
-static void lcm_seeds(void)
-{
+static void lcm_seeds(void) {
     uint8_t b[1024];
     loadid_lcm_joint_state_t js;
     memset(&js, 0, sizeof js);
@@ -326,8 +315,8 @@ static void lcm_seeds(void)
 
     /* udpm: a fragment of a long message, and two URLs (the same bytes are
      * tried as an lcm.url). */
-    static const uint8_t frag[24] = {'L', 'C', '0', '3', 0, 0, 0, 7, 0, 0, 0x10, 0,
-                                     0, 0, 0, 0, 0, 2, 'C', 'H', 0, 1, 2, 3};
+    static const uint8_t frag[24] = {'L', 'C', '0', '3', 0, 0, 0,   7,   0, 0, 0x10, 0,
+                                     0,   0,   0,   0,   0, 2, 'C', 'H', 0, 1, 2,    3};
     lcm_seed("lcm_udpm", "fragment", frag, sizeof frag, NULL);
     static const char url1[] = "udpm://239.255.76.67:7667?ttl=0";
     static const char url2[] = "udpm://224.0.0.251:1?recv_buf_size=2097152&ttl=255&other=1";
@@ -337,8 +326,7 @@ static void lcm_seeds(void)
 
 /* ---- modbus_ft: operations as fuzz_modbus_ft.c reads them ---- */
 
-static void put_regs(buf_t *s, uint8_t op, const uint16_t *r, int n)
-{
+static void put_regs(buf_t *s, uint8_t op, const uint16_t *r, int n) {
     put(s, &op, 1);
     for (int k = 0; k < n; ++k) {
         const uint8_t be[2] = {(uint8_t)(r[k] >> 8), (uint8_t)r[k]};
@@ -346,8 +334,7 @@ static void put_regs(buf_t *s, uint8_t op, const uint16_t *r, int n)
     }
 }
 
-static void modbus_seeds(void)
-{
+static void modbus_seeds(void) {
     const double fsf[3] = {200, 200, 200}, fsm[3] = {12, 12, 12};
     buf_t s = {.n = 0};
     uint16_t h[LOADID_MODBUS_FT_HOLDING_COUNT];
@@ -373,7 +360,7 @@ static void modbus_seeds(void)
     put_regs(&s, 0, r, LOADID_MODBUS_FT_INPUT_COUNT); /* fault */
     loadid_modbus_ft_encode(fsf, fsm, zero, zero, false, 9, r);
     put_regs(&s, 0, r, LOADID_MODBUS_FT_INPUT_COUNT); /* a gap of 6 */
-    r[LOADID_MODBUS_FT_REG_STATUS] = 0x0100;           /* reserved bits */
+    r[LOADID_MODBUS_FT_REG_STATUS] = 0x0100;          /* reserved bits */
     put_regs(&s, 0, r, LOADID_MODBUS_FT_INPUT_COUNT);
     const uint16_t hz[6] = {2000, 2000, 0, 1200, 1200, 1200}; /* a zero full scale */
     put_regs(&s, 2, hz, LOADID_MODBUS_FT_HOLDING_COUNT);
@@ -384,12 +371,12 @@ static void modbus_seeds(void)
     write_seed("modbus_ft", "saturated_fault_gap_reopen", &s);
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     if (argc == 2 && (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0)) {
-        printf("usage: fuzz_make_seeds CORPUS_DIR\n"
-               "Writes the binary seeds of the fuzz corpora (JR3, candump, LCM, Modbus) into\n"
-               "CORPUS_DIR/<target>/, byte-identical on every run.\n");
+        printf(
+            "usage: fuzz_make_seeds CORPUS_DIR\n"
+            "Writes the binary seeds of the fuzz corpora (JR3, candump, LCM, Modbus) into\n"
+            "CORPUS_DIR/<target>/, byte-identical on every run.\n");
         return 0;
     }
     if (argc != 2) {

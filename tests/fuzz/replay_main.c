@@ -16,8 +16,7 @@
 
 #include "fuzz_check.h"
 
-static int run_file(const char *path)
-{
+static int run_file(const char *path) {
     FILE *f = fopen(path, "rb");
     if (!f) {
         perror(path);
@@ -59,13 +58,11 @@ static int run_file(const char *path)
     return 0;
 }
 
-static int by_name(const struct dirent **a, const struct dirent **b)
-{
+static int by_name(const struct dirent **a, const struct dirent **b) {
     return strcmp((*a)->d_name, (*b)->d_name);
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     int failed = 0, ran = 0;
     for (int i = 1; i < argc; ++i) {
         struct stat st;

@@ -55,7 +55,7 @@ typedef struct {
     long committed; /* of count, those inside the loop's window */
 } site_t;
 
-static volatile int window_open;  /* between the first epoll_wait and exit */
+static volatile int window_open; /* between the first epoll_wait and exit */
 static long pending, loop_count, waits, start_after = 1;
 static site_t sites[SITE_MAX];
 static int nsites;
@@ -69,8 +69,7 @@ static void site_note(void) {
     int n = backtrace(pc, SITE_DEPTH + SKIP); /* primed in the constructor */
     in_hook = 0;
     n = n > SKIP ? n - SKIP : 0;
-    while (__atomic_test_and_set(&lock, __ATOMIC_ACQUIRE)) {
-    }
+    while (__atomic_test_and_set(&lock, __ATOMIC_ACQUIRE)) {}
     ++pending;
     int i;
     for (i = 0; i < nsites; ++i)
@@ -132,8 +131,7 @@ int posix_memalign(void **out, size_t a, size_t n) {
 /* Entering a wait commits what the previous iteration allocated to the
  * loop's count. */
 int epoll_wait(int ep, struct epoll_event *ev, int max, int timeout) {
-    while (__atomic_test_and_set(&lock, __ATOMIC_ACQUIRE)) {
-    }
+    while (__atomic_test_and_set(&lock, __ATOMIC_ACQUIRE)) {}
     if (++waits >= start_after) {
         loop_count += pending;
         pending = 0;

@@ -72,8 +72,7 @@ int main(int argc, char **argv) {
     memcpy(ifr.ifr_name, argv[1], strlen(argv[1]));
     struct sockaddr_can addr = {.can_family = AF_CAN};
     if (fd < 0 || ioctl(fd, SIOCGIFINDEX, &ifr) < 0 ||
-        (addr.can_ifindex = ifr.ifr_ifindex,
-         bind(fd, (struct sockaddr *)&addr, sizeof addr) < 0) ||
+        (addr.can_ifindex = ifr.ifr_ifindex, bind(fd, (struct sockaddr *)&addr, sizeof addr) < 0) ||
         setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, NULL, 0) < 0) {
         fprintf(stderr, "can_flood: %s: %s\n", argv[1], strerror(errno));
         return 1;
@@ -122,10 +121,11 @@ int main(int argc, char **argv) {
     }
     /* The rate over the frames' span: N - 1 intervals. */
     const double span = first >= 0 ? last - first : 0;
-    printf("LOADID-FLOOD sent %lld frames in %.3f s (%.0f frames/s), refused %lld, extended "
-           "%lld, remote %lld\n",
-           (long long)sent, span, span > 0 ? (double)(sent - 1) / span : 0.0, (long long)refused,
-           (long long)extended, (long long)remote);
+    printf(
+        "LOADID-FLOOD sent %lld frames in %.3f s (%.0f frames/s), refused %lld, extended "
+        "%lld, remote %lld\n",
+        (long long)sent, span, span > 0 ? (double)(sent - 1) / span : 0.0, (long long)refused,
+        (long long)extended, (long long)remote);
     close(fd);
     return 0;
 }

@@ -36,8 +36,8 @@ static void on_signal(int sig) {
     stop = 1;
 }
 
-static void on_estimate(const lcm_recv_buf_t *rbuf, const char *channel,
-                        const loadid_estimate_t *m, void *ctx) {
+static void on_estimate(const lcm_recv_buf_t *rbuf, const char *channel, const loadid_estimate_t *m,
+                        void *ctx) {
     (void)rbuf, (void)channel, (void)ctx;
     if (m->state != LOADID_ESTIMATE_T_DONE && m->state != LOADID_ESTIMATE_T_FAILED) return;
     printf("LOADID-ESTIMATE method %d state %d samples %lld phi", m->method, m->state,
@@ -71,8 +71,10 @@ int main(int argc, char **argv) {
     while (!stop) {
         struct pollfd pfd = {.fd = lcm_get_fileno(lcm), .events = POLLIN};
         const int n = poll(&pfd, 1, 100);
-        if (n > 0) lcm_handle(lcm);
-        else if (n < 0 && errno != EINTR) break;
+        if (n > 0)
+            lcm_handle(lcm);
+        else if (n < 0 && errno != EINTR)
+            break;
     }
     lcm_destroy(lcm);
     return 0;

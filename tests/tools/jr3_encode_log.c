@@ -21,15 +21,13 @@
 #include "loadid/candump.h"
 #include "loadid/jr3.h"
 
-static int die(long line, const char *why)
-{
+static int die(long line, const char *why) {
     fprintf(stderr, "jr3_encode_log: line %ld: %s\n", line, why);
     return 1;
 }
 
 /* Reads one number token; returns 0 or -1. */
-static int next_double(char **p, double *out)
-{
+static int next_double(char **p, double *out) {
     char *end;
     errno = 0;
     *out = strtod(*p, &end);
@@ -40,8 +38,7 @@ static int next_double(char **p, double *out)
     return 0;
 }
 
-static int next_ll(char **p, long long *out)
-{
+static int next_ll(char **p, long long *out) {
     char *end;
     errno = 0;
     *out = strtoll(*p, &end, 0);
@@ -52,8 +49,7 @@ static int next_ll(char **p, long long *out)
     return 0;
 }
 
-static int print_frame(const loadid_can_frame_t *f)
-{
+static int print_frame(const loadid_can_frame_t *f) {
     char buf[LOADID_CANDUMP_LINE_MAX];
     int n = loadid_candump_format(f, "vcan0", buf, sizeof buf);
     if (n < 0) {
@@ -63,14 +59,14 @@ static int print_frame(const loadid_can_frame_t *f)
     return 0;
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     if (argc == 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
-        printf("usage: jr3_encode_log < COMMANDS\n"
-               "Encodes JR3 frames as candump lines (base 0x1A0, default full scales,\n"
-               "vcan0), one command a line on stdin:\n"
-               "  S t_us seq fault_groups v0 .. v11   a sample (SI) -> four lines\n"
-               "  F t_us group fs0 fs1 fs2            a full-scale frame -> one line\n");
+        printf(
+            "usage: jr3_encode_log < COMMANDS\n"
+            "Encodes JR3 frames as candump lines (base 0x1A0, default full scales,\n"
+            "vcan0), one command a line on stdin:\n"
+            "  S t_us seq fault_groups v0 .. v11   a sample (SI) -> four lines\n"
+            "  F t_us group fs0 fs1 fs2            a full-scale frame -> one line\n");
         return 0;
     }
     if (argc > 1) {
@@ -107,8 +103,8 @@ int main(int argc, char **argv)
                 }
             }
             loadid_can_frame_t fr[LOADID_JR3_NUM_GROUPS];
-            int rc = loadid_jr3_encode(&cfg, (const double(*)[3])v, (uint8_t)a,
-                                       (unsigned)fault, t_us, fr);
+            int rc = loadid_jr3_encode(&cfg, (const double(*)[3])v, (uint8_t)a, (unsigned)fault,
+                                       t_us, fr);
             if (rc < 0) {
                 return die(lineno, loadid_jr3_strerror(rc));
             }

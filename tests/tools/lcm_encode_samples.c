@@ -21,8 +21,7 @@
 #include "lcmtypes/loadid_status_t.h"
 #include "lcmtypes/loadid_wrench_t.h"
 
-static void print_hex(const char *type, int64_t hash, const unsigned char *buf, int n)
-{
+static void print_hex(const char *type, int64_t hash, const unsigned char *buf, int n) {
     printf("%s %016" PRIx64 " ", type, (uint64_t)hash);
     for (int i = 0; i < n; ++i) {
         printf("%02x", buf[i]);
@@ -31,24 +30,24 @@ static void print_hex(const char *type, int64_t hash, const unsigned char *buf, 
 }
 
 /* ENCODE(type, instance): encode into a buffer of its exact size, print. */
-#define ENCODE(T, msg)                                                                   \
-    do {                                                                                 \
-        int size_ = loadid_##T##_encoded_size(&(msg));                                   \
-        unsigned char *buf_ = malloc((size_t)size_);                                     \
-        if (!buf_ || loadid_##T##_encode(buf_, 0, size_, &(msg)) != size_) {             \
-            fprintf(stderr, "lcm_encode_samples: cannot encode " #T "\n");               \
-            return 1;                                                                    \
-        }                                                                                \
-        print_hex(#T, __loadid_##T##_get_hash(), buf_, size_);                           \
-        free(buf_);                                                                      \
+#define ENCODE(T, msg)                                                       \
+    do {                                                                     \
+        int size_ = loadid_##T##_encoded_size(&(msg));                       \
+        unsigned char *buf_ = malloc((size_t)size_);                         \
+        if (!buf_ || loadid_##T##_encode(buf_, 0, size_, &(msg)) != size_) { \
+            fprintf(stderr, "lcm_encode_samples: cannot encode " #T "\n");   \
+            return 1;                                                        \
+        }                                                                    \
+        print_hex(#T, __loadid_##T##_get_hash(), buf_, size_);               \
+        free(buf_);                                                          \
     } while (0)
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     if (argc == 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
-        printf("usage: lcm_encode_samples\n"
-               "Prints one fixed instance of each loadid LCM type as encoded by lcm-gen's\n"
-               "C code ('<type> <fingerprint> <hex>') and the types' constants.\n");
+        printf(
+            "usage: lcm_encode_samples\n"
+            "Prints one fixed instance of each loadid LCM type as encoded by lcm-gen's\n"
+            "C code ('<type> <fingerprint> <hex>') and the types' constants.\n");
         return 0;
     }
     if (argc > 1) {

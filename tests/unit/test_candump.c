@@ -28,13 +28,11 @@ static uint64_t next_u64(void) /* splitmix64 */
     return z ^ (z >> 31);
 }
 
-static int parse(const char *line, loadid_can_frame_t *f, char ifname[16])
-{
+static int parse(const char *line, loadid_can_frame_t *f, char ifname[16]) {
     return loadid_candump_parse(line, f, ifname);
 }
 
-static void test_parse_design_example(void **state)
-{
+static void test_parse_design_example(void **state) {
     (void)state;
     loadid_can_frame_t f;
     char ifname[LOADID_CANDUMP_IFNAME_MAX];
@@ -51,8 +49,7 @@ static void test_parse_design_example(void **state)
     assert_int_equal(f.dlc, 1);
 }
 
-static void test_parse_time_exact(void **state)
-{
+static void test_parse_time_exact(void **state) {
     (void)state;
     loadid_can_frame_t f;
     struct {
@@ -105,8 +102,7 @@ static void test_parse_time_exact(void **state)
     }
 }
 
-static void test_parse_ids(void **state)
-{
+static void test_parse_ids(void **state) {
     (void)state;
     loadid_can_frame_t f;
     assert_int_equal(parse("(1.000000) can0 000#", &f, NULL), 0);
@@ -126,19 +122,22 @@ static void test_parse_ids(void **state)
     assert_int_equal(parse("(1.000000) can0 1abcdef0#", &f, NULL), 0);
     assert_int_equal(f.id, 0x1ABCDEF0);
 
-    const char *bad[] = {
-        "(1.000000) can0 800#",      /* above 11 bits */
-        "(1.000000) can0 FFF#",
-        "(1.000000) can0 20000000#", /* CAN_ERR_FLAG: an error frame */
-        "(1.000000) can0 80000123#", /* CAN_EFF_FLAG spelled out */
-        "(1.000000) can0 1A#",       /* 2 digits */
-        "(1.000000) can0 1A0B#",     /* 4 */
-        "(1.000000) can0 1234567#",  /* 7 */
-        "(1.000000) can0 123456789#",/* 9 */
-        "(1.000000) can0 #00",
-        "(1.000000) can0 1G0#",
-        "(1.000000) can0 -12#",
-    };
+    const char
+        *
+            bad[] =
+                {
+                    "(1.000000) can0 800#", /* above 11 bits */
+                    "(1.000000) can0 FFF#",
+                    "(1.000000) can0 20000000#",  /* CAN_ERR_FLAG: an error frame */
+                    "(1.000000) can0 80000123#",  /* CAN_EFF_FLAG spelled out */
+                    "(1.000000) can0 1A#",        /* 2 digits */
+                    "(1.000000) can0 1A0B#",      /* 4 */
+                    "(1.000000) can0 1234567#",   /* 7 */
+                    "(1.000000) can0 123456789#", /* 9 */
+                    "(1.000000) can0 #00",
+                    "(1.000000) can0 1G0#",
+                    "(1.000000) can0 -12#",
+                };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
         int rc = parse(bad[i], &f, NULL);
         if (rc != LOADID_CANDUMP_E_ID) {
@@ -147,8 +146,7 @@ static void test_parse_ids(void **state)
     }
 }
 
-static void test_parse_data(void **state)
-{
+static void test_parse_data(void **state) {
     (void)state;
     loadid_can_frame_t f;
     assert_int_equal(parse("(1.000000) can0 1A0#", &f, NULL), 0);
@@ -186,8 +184,7 @@ static void test_parse_data(void **state)
     }
 }
 
-static void test_parse_fd_and_remote(void **state)
-{
+static void test_parse_fd_and_remote(void **state) {
     (void)state;
     loadid_can_frame_t f;
     assert_int_equal(parse("(1.000000) can0 123##1112233", &f, NULL), LOADID_CANDUMP_E_FD);
@@ -200,8 +197,7 @@ static void test_parse_fd_and_remote(void **state)
     assert_int_equal(parse("(1.000000) can0 12345678#R\n", &f, NULL), LOADID_CANDUMP_E_REMOTE);
 }
 
-static void test_parse_syntax_and_endings(void **state)
-{
+static void test_parse_syntax_and_endings(void **state) {
     (void)state;
     loadid_can_frame_t f;
     char ifname[LOADID_CANDUMP_IFNAME_MAX];
@@ -258,8 +254,7 @@ static void test_parse_syntax_and_endings(void **state)
     assert_int_equal(parse("(1.000000) can0 123#", NULL, ifname), -EINVAL);
 }
 
-static void test_format(void **state)
-{
+static void test_format(void **state) {
     (void)state;
     char buf[128];
     loadid_can_frame_t f;
@@ -321,8 +316,7 @@ static void test_format(void **state)
     assert_int_equal(loadid_candump_format(&f, "can0", buf, 0), -ENOSPC);
 }
 
-static void test_round_trip_random(void **state)
-{
+static void test_round_trip_random(void **state) {
     (void)state;
     mix_state = 7;
     char buf[LOADID_CANDUMP_LINE_MAX];
@@ -350,8 +344,7 @@ static void test_round_trip_random(void **state)
     }
 }
 
-static void test_reader(void **state)
-{
+static void test_reader(void **state) {
     (void)state;
     FILE *fp = tmpfile();
     assert_non_null(fp);
@@ -459,8 +452,7 @@ static void test_reader(void **state)
     assert_int_equal(loadid_candump_reader_line(NULL), 0);
 }
 
-static void test_strerror(void **state)
-{
+static void test_strerror(void **state) {
     (void)state;
     const int codes[] = {0,
                          LOADID_CANDUMP_E_SYNTAX,
@@ -487,8 +479,7 @@ static void test_strerror(void **state)
     assert_string_equal(loadid_candump_strerror(-424242), "unknown error");
 }
 
-int main(void)
-{
+int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_parse_design_example),
         cmocka_unit_test(test_parse_time_exact),

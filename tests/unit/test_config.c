@@ -139,13 +139,13 @@ static void assert_doubles(const double *a, const double *expected, int n, const
     }
 }
 
-#define ASSERT_EQ_D(a, e)                                                                        \
-    do {                                                                                         \
-        const double a_ = (a), e_ = (e);                                                         \
-        if (!(a_ == e_)) {                                                                       \
-            print_error("%s: %.17g, expected %.17g\n", #a, a_, e_);                              \
-            fail();                                                                              \
-        }                                                                                        \
+#define ASSERT_EQ_D(a, e)                                           \
+    do {                                                            \
+        const double a_ = (a), e_ = (e);                            \
+        if (!(a_ == e_)) {                                          \
+            print_error("%s: %.17g, expected %.17g\n", #a, a_, e_); \
+            fail();                                                 \
+        }                                                           \
     } while (0)
 
 /* docs/INTERFACE.md's and config.h's defaults, written out. */
@@ -267,8 +267,9 @@ static void empty_files_give_the_defaults_with_a_warning(void **state) {
         assert_prefix(w.msg[0], expected);
     }
     /* Empty sections are sections left out; no warning. */
-    const char *path = write_file("sections.yaml", "robot:\ncan:\n  # interface: can0\njr3:\n"
-                                                   "  full_scale: ~\ntrajectory:\n  workspace:\n");
+    const char *path = write_file("sections.yaml",
+                                  "robot:\ncan:\n  # interface: can0\njr3:\n"
+                                  "  full_scale: ~\ntrajectory:\n  workspace:\n");
     loadid_config_t cfg;
     warnings_t w;
     load_ok(path, &cfg, &w);
@@ -429,9 +430,10 @@ static void every_key_is_read(void **state) {
     ASSERT_EQ_D(c.sim_vibration_linear, 0);
     ASSERT_EQ_D(c.sim_vibration_angular, 1.5);
     ASSERT_EQ_D(c.sim_still_s, 1);
-    assert_doubles(c.sim_load_phi,
-                   (const double[]){2, 0.01, 0.02, 0.03, 0.004, 0.0001, 0.0002, 0.005, 0.0003, 0.006},
-                   10, "load_phi");
+    assert_doubles(
+        c.sim_load_phi,
+        (const double[]){2, 0.01, 0.02, 0.03, 0.004, 0.0001, 0.0002, 0.005, 0.0003, 0.006}, 10,
+        "load_phi");
     assert_doubles(c.sim_offset, (const double[]){-1, 1, -2, 0.01, 0.02, -0.03}, 6, "offset");
     assert_true(c.sim_seed == UINT64_MAX);
 }
@@ -459,10 +461,11 @@ static void names_and_single_values(void **state) {
      * a quoted string where a string is expected; integers for reals. */
     loadid_config_t c;
     warnings_t w;
-    load_ok(write_file("s.yaml", "estimation:\n  methods: [RIV]\n"
-                                 "trajectory:\n  acc_limit: 15\n"
-                                 "can:\n  base_id: 416\n  interface: \"can0\"\n"
-                                 "robot:\n  gravity: [0, 0, -10]\n"),
+    load_ok(write_file("s.yaml",
+                       "estimation:\n  methods: [RIV]\n"
+                       "trajectory:\n  acc_limit: 15\n"
+                       "can:\n  base_id: 416\n  interface: \"can0\"\n"
+                       "robot:\n  gravity: [0, 0, -10]\n"),
             &c, &w);
     assert_int_equal(w.count, 0);
     assert_int_equal(c.num_methods, 1);
@@ -492,7 +495,8 @@ static void hex_base_id(void **state) {
                  "2: can.base_id: must be at most 0x7FB (base+4 must be an 11-bit identifier, "
                  "<= 0x7FF), got 0x7FC");
     expect_error("can:\n  base_id: 0x800\n", "2: can.base_id: must be at most 0x7FB");
-    expect_error("can:\n  base_id: -1\n", "2: can.base_id: expected a non-negative integer, got '-1'");
+    expect_error("can:\n  base_id: -1\n",
+                 "2: can.base_id: expected a non-negative integer, got '-1'");
     expect_error("can:\n  base_id: 0x1G0\n", "2: can.base_id: expected an integer, got '0x1G0'");
     expect_error("can:\n  base_id: 416.0\n", "2: can.base_id: expected an integer, got '416.0'");
     expect_error("can:\n  base_id: 0x1FFFFFFFFFFFFFFFF\n", "2: can.base_id: integer out of range");
@@ -534,7 +538,8 @@ static void relative_urdf_paths_follow_the_config_file(void **state) {
     /* results.directory and results.load follow the same rule; default "". */
     assert_string_equal(c.results_directory, "");
     assert_string_equal(c.results_load, "");
-    load_ok(write_file("sub/d.yaml", "results:\n  directory: out\n  load: /r/latest.yaml\n"), &c, &w);
+    load_ok(write_file("sub/d.yaml", "results:\n  directory: out\n  load: /r/latest.yaml\n"), &c,
+            &w);
     snprintf(expected, sizeof expected, "%s/sub/out", g_dir);
     assert_string_equal(c.results_directory, expected);
     assert_string_equal(c.results_load, "/r/latest.yaml");
@@ -585,7 +590,8 @@ static void syntax_errors_name_their_line(void **state) {
                  "indentation (while scanning a plain scalar on line 2)");
     expect_error("robot:\n\tbase_link: a\n",
                  "2: robot: syntax error: found character that cannot start any token");
-    expect_error("lcm:\n  url: \"udpm://x\n", "3: lcm.url: syntax error: found unexpected end of stream");
+    expect_error("lcm:\n  url: \"udpm://x\n",
+                 "3: lcm.url: syntax error: found unexpected end of stream");
     expect_error("robot:\n  base_link: a\n---\nrobot:\n  base_link: b\n",
                  "3: (top level): a second YAML document: one document per file");
     expect_error("robot:\n  base_link: &b base\n  sensor_link: *b\n",
@@ -598,11 +604,13 @@ static void syntax_errors_name_their_line(void **state) {
 
 static void wrong_types_name_key_and_line(void **state) {
     (void)state;
-    expect_error("- robot\n- can\n", "1: (top level): expected a mapping of sections (robot:, can:, "
-                                     "...), got a sequence");
+    expect_error("- robot\n- can\n",
+                 "1: (top level): expected a mapping of sections (robot:, can:, "
+                 "...), got a sequence");
     expect_error("just text\n", "1: (top level): expected a mapping of sections");
     expect_error("\nrobot: 5\n", "2: robot: expected a mapping, got '5'");
-    expect_error("jr3:\n  full_scale: [1, 2, 3]\n", "2: jr3.full_scale: expected a mapping, got a sequence");
+    expect_error("jr3:\n  full_scale: [1, 2, 3]\n",
+                 "2: jr3.full_scale: expected a mapping, got a sequence");
     expect_error("estimation:\n  duration_s:\n    seconds: 2\n",
                  "3: estimation.duration_s: expected a number, got a mapping");
     expect_error("estimation:\n  duration_s: [2]\n",
@@ -638,7 +646,8 @@ static void wrong_lengths_and_values(void **state) {
                  "3: jr3.full_scale.force: expected 3 numbers, got 2");
     expect_error("distal:\n  phi: [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]\n",
                  "2: distal.phi: expected 10 numbers, got 11");
-    expect_error("trajectory:\n  home: []\n", "2: trajectory.home: expected at least 1 number, got 0");
+    expect_error("trajectory:\n  home: []\n",
+                 "2: trajectory.home: expected at least 1 number, got 0");
     expect_error("trajectory:\n  acc_limit: [1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n",
                  "2: trajectory.acc_limit: expected at most 16 numbers, got 17");
     expect_error("jr3:\n  full_scale:\n    force: [200, 200, 200]\n    moment: [12, -12, 12]\n",
@@ -654,7 +663,8 @@ static void wrong_lengths_and_values(void **state) {
     expect_error("estimation:\n  duration_s: 1e999\n",
                  "2: estimation.duration_s: number out of range: '1e999'");
     expect_error("estimation:\n  duration_s: 0\n", "2: estimation.duration_s: must be > 0, got 0");
-    expect_error("noise:\n  force: 0.1\n  torque: -0.005\n", "3: noise.torque: must be > 0, got -0.005");
+    expect_error("noise:\n  force: 0.1\n  torque: -0.005\n",
+                 "3: noise.torque: must be > 0, got -0.005");
     expect_error("zeroing:\n  window_s: 0\n", "2: zeroing.window_s: must be > 0, got 0");
     expect_error("estimation:\n  max_refused_share: 1.5\n",
                  "2: estimation.max_refused_share: a share of the window's samples: must be <= 1, "
@@ -667,29 +677,34 @@ static void wrong_lengths_and_values(void **state) {
     expect_error("estimation:\n  max_missing_share: -1\n",
                  "2: estimation.max_missing_share: must be >= 0, got -1");
     expect_error("kalman:\n  meas_sigma: 0\n", "2: kalman.meas_sigma: must be > 0, got 0");
-    expect_error("simulation:\n  backlash: -1e-4\n", "2: simulation.backlash: must be >= 0, got -0.0001");
+    expect_error("simulation:\n  backlash: -1e-4\n",
+                 "2: simulation.backlash: must be >= 0, got -0.0001");
     expect_error("trajectory:\n  harmonics: 0\n", "2: trajectory.harmonics: must be >= 1, got 0");
     expect_error("trajectory:\n  base_frequency: 0.5\n  harmonics: 5\n",
                  "3: trajectory.harmonics: 5 harmonics of 0.5 Hz reach 2.5 Hz, above "
                  "trajectory.max_frequency 2 Hz");
     expect_error("trajectory:\n  max_frequency: 1\n",
                  "2: trajectory.max_frequency: 4 harmonics of 0.5 Hz reach 2 Hz");
-    expect_error("trajectory:\n  vel_scale: 1.5\n", "2: trajectory.vel_scale: a fraction of the URDF");
+    expect_error("trajectory:\n  vel_scale: 1.5\n",
+                 "2: trajectory.vel_scale: a fraction of the URDF");
     expect_error("trajectory:\n  workspace:\n    min: [0, 0, 0]\n    max: [1, 1, 0]\n",
                  "3: trajectory.workspace.min: workspace min must be below max on every axis: z: "
                  "min 0 >= max 0");
     expect_error("trajectory:\n  workspace:\n    max: [1, -2e9, 1]\n",
                  "3: trajectory.workspace.max: workspace min must be below max on every axis: y");
-    expect_error("trajectory:\n  monte_carlo: 3\n", "2: trajectory.monte_carlo: 4 candidates to optimise "
-                                                    "out of 3 random ones");
-    expect_error("can:\n  interface: \"\"\n", "2: can.interface: a network interface name has 1 to 15");
+    expect_error("trajectory:\n  monte_carlo: 3\n",
+                 "2: trajectory.monte_carlo: 4 candidates to optimise "
+                 "out of 3 random ones");
+    expect_error("can:\n  interface: \"\"\n",
+                 "2: can.interface: a network interface name has 1 to 15");
     expect_error("can:\n  interface: a_very_long_name0\n",
                  "2: can.interface: a network interface name has 1 to 15 characters, got "
                  "'a_very_long_name0'");
     expect_error("lcm:\n  url: 239.255.76.67\n", "2: lcm.url: expected an LCM URL");
-    expect_error("robot:\n  base_link: "
-                 "a123456789012345678901234567890123456789012345678901234567890123\n",
-                 "2: robot.base_link: longer than 63 characters");
+    expect_error(
+        "robot:\n  base_link: "
+        "a123456789012345678901234567890123456789012345678901234567890123\n",
+        "2: robot.base_link: longer than 63 characters");
 }
 
 /* simulation.zero, drift, accel_bias, alpha_bias, jitter_us, trajectory_scale:
@@ -742,7 +757,8 @@ static void simulation_realism_keys(void **state) {
 
     expect_error("simulation:\n  zero: 0\n", "2: simulation.zero: expected true or false, got '0'");
     expect_error("simulation:\n  zero: [true]\n", "2: simulation.zero: expected true or false");
-    expect_error("simulation:\n  drift: [0, 0, 0]\n", "2: simulation.drift: expected 6 numbers, got 3");
+    expect_error("simulation:\n  drift: [0, 0, 0]\n",
+                 "2: simulation.drift: expected 6 numbers, got 3");
     expect_error("simulation:\n  drift: [0, 0, 0, 0, x, 0]\n",
                  "2: simulation.drift[4]: expected a number, got 'x'");
     expect_error("simulation:\n  accel_bias: [0, 0]\n",
@@ -751,16 +767,18 @@ static void simulation_realism_keys(void **state) {
                  "2: simulation.alpha_bias[2]: expected a finite number, got '.inf'");
     expect_error("simulation:\n  alpha_bias: 1\n",
                  "2: simulation.alpha_bias: expected a sequence of 3 numbers, got '1'");
-    expect_error("simulation:\n  jitter_us: -1\n", "2: simulation.jitter_us: must be 0..999, got -1");
+    expect_error("simulation:\n  jitter_us: -1\n",
+                 "2: simulation.jitter_us: must be 0..999, got -1");
     expect_error("simulation:\n  jitter_us: 1000\n",
                  "2: simulation.jitter_us: must be 0..999, got 1000");
     expect_error("simulation:\n  jitter_us: 2.5\n",
                  "2: simulation.jitter_us: expected an integer, got '2.5'");
     expect_error("simulation:\n  trajectory_scale: 0\n",
                  "2: simulation.trajectory_scale: must be > 0, got 0");
-    expect_error("simulation:\n  seed: 3\n  trajectory_scale: 1.5\n",
-                 "3: simulation.trajectory_scale: a fraction of the trajectory's amplitude: must be "
-                 "<= 1, got 1.5");
+    expect_error(
+        "simulation:\n  seed: 3\n  trajectory_scale: 1.5\n",
+        "3: simulation.trajectory_scale: a fraction of the trajectory's amplitude: must be "
+        "<= 1, got 1.5");
 }
 
 static void bad_names(void **state) {
@@ -768,7 +786,8 @@ static void bad_names(void **state) {
     expect_error("estimation:\n  methods: [RTLS, FOO]\n",
                  "2: estimation.methods[1]: unknown method 'FOO' (RLS, RIV, RTLS, LS_BATCH, "
                  "TLS_BATCH or REFINED)");
-    expect_error("estimation:\n  methods: [rtls]\n", "2: estimation.methods[0]: unknown method 'rtls'");
+    expect_error("estimation:\n  methods: [rtls]\n",
+                 "2: estimation.methods[0]: unknown method 'rtls'");
     expect_error("estimation:\n  methods:\n    - RTLS\n    - RIV\n    - RTLS\n",
                  "5: estimation.methods[2]: method RTLS listed twice (first as item 0)");
     expect_error("estimation:\n  methods: [RLS, RIV, RTLS, LS_BATCH, TLS_BATCH, RLS]\n",
@@ -813,9 +832,10 @@ static void unknown_keys_in_loadid_sections_are_errors(void **state) {
     expect_error("realtime:\n  nice: 5\n",
                  "2: realtime.nice: unknown key (realtime has priority, lock_memory, cpu)");
     /* the first in file order, and an error even after valid keys */
-    expect_error("lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n  chanel_prefix: R2_\n"
-                 "estimation:\n  duraton_s: 2\n",
-                 "3: lcm.chanel_prefix: unknown key (did you mean 'channel_prefix'?)");
+    expect_error(
+        "lcm:\n  url: udpm://239.255.76.67:7667?ttl=0\n  chanel_prefix: R2_\n"
+        "estimation:\n  duraton_s: 2\n",
+        "3: lcm.chanel_prefix: unknown key (did you mean 'channel_prefix'?)");
     /* a misspelt section: a near miss of a loadid section's name */
     expect_error("estimaton:\n  methods: [RLS]\n",
                  "1: estimaton: unknown section (did you mean 'estimation'?)");
@@ -836,12 +856,12 @@ static void other_programs_sections_are_warnings(void **state) {
     const char *path = write_file("shared.yaml",
                                   "robot:\n"
                                   "  base_link: world\n"
-                                  "dashboard:\n"                /* line 3: another program's */
+                                  "dashboard:\n" /* line 3: another program's */
                                   "  port: 8080\n"
                                   "  robot: x\n"
                                   "estimation:\n"
                                   "  duration_s: 2\n"
-                                  "plotting: true\n");          /* line 8 */
+                                  "plotting: true\n"); /* line 8 */
     loadid_config_t c;
     warnings_t w;
     load_ok(path, &c, &w);
@@ -931,28 +951,31 @@ static void load_from_a_buffer(void **state) {
     memset(&from_text, 0, sizeof from_text);
     load_ok(EXAMPLE, &from_file, &w);
     char err[1024] = "x";
-    assert_int_equal(loadid_config_load_string(EXAMPLE, text, n, &from_text, err, sizeof err,
-                                               collect, &w), 0);
+    assert_int_equal(
+        loadid_config_load_string(EXAMPLE, text, n, &from_text, err, sizeof err, collect, &w), 0);
     assert_string_equal(err, "");
     assert_memory_equal(&from_file, &from_text, sizeof from_file);
 
     /* Not NUL-terminated: only len bytes count ("robot:" then junk). */
     const char partial[] = "robot:\n  urdf: r.urdf\nXXXX";
     assert_int_equal(loadid_config_load_string("/nowhere/c.yaml", partial, sizeof partial - 5,
-                                               &from_text, err, sizeof err, NULL, NULL), 0);
+                                               &from_text, err, sizeof err, NULL, NULL),
+                     0);
     assert_string_equal(from_text.robot_urdf, "/nowhere/r.urdf");
 
     /* Errors name the given file; cfg stays untouched. */
     loadid_config_t before = from_text;
     const char bad[] = "can:\n  base_id: 0x800\n";
-    assert_int_equal(loadid_config_load_string("/nowhere/c.yaml", bad, strlen(bad), &from_text,
-                                               err, sizeof err, NULL, NULL), -EINVAL);
+    assert_int_equal(loadid_config_load_string("/nowhere/c.yaml", bad, strlen(bad), &from_text, err,
+                                               sizeof err, NULL, NULL),
+                     -EINVAL);
     assert_prefix(err, "/nowhere/c.yaml:2: can.base_id:");
     assert_memory_equal(&from_text, &before, sizeof before);
-    assert_int_equal(loadid_config_load_string(NULL, bad, 1, &from_text, err, sizeof err, NULL,
-                                               NULL), -EINVAL);
-    assert_int_equal(loadid_config_load_string("c.yaml", NULL, 1, &from_text, err, sizeof err,
-                                               NULL, NULL), -EINVAL);
+    assert_int_equal(
+        loadid_config_load_string(NULL, bad, 1, &from_text, err, sizeof err, NULL, NULL), -EINVAL);
+    assert_int_equal(
+        loadid_config_load_string("c.yaml", NULL, 1, &from_text, err, sizeof err, NULL, NULL),
+        -EINVAL);
 }
 
 /* --- The YAML tree itself ------------------------------------------------- */
@@ -968,15 +991,16 @@ static loadid_yaml_doc_t *parse(const char *text) {
 
 static void yaml_tree_nodes_and_lines(void **state) {
     (void)state;
-    loadid_yaml_doc_t *doc = parse("# comment\n"
-                                   "joints:\n"
-                                   "  - name: j1\n"
-                                   "    coeffs: [[1, 2], [3, 4.5]]\n"
-                                   "  - name: j2\n"
-                                   "    coeffs:\n"
-                                   "      - [5, 6]\n"
-                                   "label: 'a\\b'\n"
-                                   "flag: True\n");
+    loadid_yaml_doc_t *doc = parse(
+        "# comment\n"
+        "joints:\n"
+        "  - name: j1\n"
+        "    coeffs: [[1, 2], [3, 4.5]]\n"
+        "  - name: j2\n"
+        "    coeffs:\n"
+        "      - [5, 6]\n"
+        "label: 'a\\b'\n"
+        "flag: True\n");
     loadid_yaml_node_t *root = loadid_yaml_root(doc);
     assert_int_equal(loadid_yaml_kind(root), LOADID_YAML_MAPPING);
     assert_int_equal(loadid_yaml_count(root), 3);
@@ -1013,7 +1037,8 @@ static void yaml_tree_nodes_and_lines(void **state) {
     loadid_yaml_node_t *j1 = loadid_yaml_item(joints, 0);
     loadid_yaml_node_t *c1 = loadid_yaml_get(j1, "coeffs");
     assert_int_equal(loadid_yaml_as_doubles(loadid_yaml_item(c1, 1), v, 3, 3, NULL), -EINVAL);
-    assert_string_equal(loadid_yaml_error(doc), "t.yaml:4: joints[0].coeffs[1]: expected 3 numbers, got 2");
+    assert_string_equal(loadid_yaml_error(doc),
+                        "t.yaml:4: joints[0].coeffs[1]: expected 3 numbers, got 2");
     assert_int_equal(loadid_yaml_as_doubles(c1, v, 2, 2, NULL), -EINVAL);
     assert_string_equal(loadid_yaml_error(doc),
                         "t.yaml:4: joints[0].coeffs[0]: expected a number, got a sequence");
@@ -1045,15 +1070,15 @@ static void yaml_tree_nodes_and_lines(void **state) {
      * beyond, and fewer edits than the typed name has characters. */
     assert_null(loadid_yaml_get(root, "cpu"));
     assert_null(loadid_yaml_get(root, "max_evals"));
-    assert_string_equal(loadid_yaml_suggest(root, "cup"), "cpu");        /* a swap */
+    assert_string_equal(loadid_yaml_suggest(root, "cup"), "cpu"); /* a swap */
     assert_string_equal(loadid_yaml_suggest(root, "Label"), "label");
     assert_string_equal(loadid_yaml_suggest(root, "mx_evls"), "max_evals"); /* 2 of 3 */
     assert_null(loadid_yaml_suggest(root, "x"));   /* 3 edits from cpu: no typo of it */
     assert_null(loadid_yaml_suggest(root, "cxx")); /* 2 edits of a 3-character key */
     assert_null(loadid_yaml_get(root, "n"));
-    assert_null(loadid_yaml_suggest(root, "m"));   /* as many edits as characters */
+    assert_null(loadid_yaml_suggest(root, "m")); /* as many edits as characters */
     assert_string_equal(loadid_yaml_suggest(root, "nn"), "n");
-    assert_null(loadid_yaml_suggest(j1, "cpu"));   /* another mapping's keys */
+    assert_null(loadid_yaml_suggest(j1, "cpu")); /* another mapping's keys */
     assert_null(loadid_yaml_suggest(NULL, "cpu"));
     char known[64];
     assert_int_equal(loadid_yaml_known_keys(j1, known, sizeof known), strlen("coeffs"));
@@ -1068,13 +1093,14 @@ static void yaml_tree_nodes_and_lines(void **state) {
 
 static void yaml_tree_scalars(void **state) {
     (void)state;
-    loadid_yaml_doc_t *doc = parse("b1: false\nb2: FALSE\nb3: yes\n"
-                                   "u1: 18446744073709551615\nu2: 0xFFFFFFFFFFFFFFFF\n"
-                                   "u3: 18446744073709551616\nu4: +7\n"
-                                   "i1: -2147483648\ni2: 2147483648\ni3: -0x10\ni4: 1e3\n"
-                                   "d1: 7\nd2: -.5e-3\nd3: 1.\nd4: .\nd5: 0x10\nd6: !!str 3\n"
-                                   "d7: '3'\nd8: +.INF\n"
-                                   "s1: ''\ns2: \"x\\0y\"\ns3: 12345\nn1: ~\nn2: null\nl: |\n  two\n  lines\n");
+    loadid_yaml_doc_t *doc = parse(
+        "b1: false\nb2: FALSE\nb3: yes\n"
+        "u1: 18446744073709551615\nu2: 0xFFFFFFFFFFFFFFFF\n"
+        "u3: 18446744073709551616\nu4: +7\n"
+        "i1: -2147483648\ni2: 2147483648\ni3: -0x10\ni4: 1e3\n"
+        "d1: 7\nd2: -.5e-3\nd3: 1.\nd4: .\nd5: 0x10\nd6: !!str 3\n"
+        "d7: '3'\nd8: +.INF\n"
+        "s1: ''\ns2: \"x\\0y\"\ns3: 12345\nn1: ~\nn2: null\nl: |\n  two\n  lines\n");
     loadid_yaml_node_t *r = loadid_yaml_root(doc);
     int b = -1, i = 0;
     uint64_t u = 0;
@@ -1092,7 +1118,8 @@ static void yaml_tree_scalars(void **state) {
     assert_int_equal(loadid_yaml_get_uint64(r, "u2", &u), 1);
     assert_true(u == UINT64_MAX);
     assert_int_equal(loadid_yaml_get_uint64(r, "u3", &u), -EINVAL);
-    assert_string_equal(loadid_yaml_error(doc), "t.yaml:6: u3: integer out of range: '18446744073709551616'");
+    assert_string_equal(loadid_yaml_error(doc),
+                        "t.yaml:6: u3: integer out of range: '18446744073709551616'");
     assert_int_equal(loadid_yaml_get_uint64(r, "u4", &u), 1);
     assert_true(u == 7);
 
@@ -1114,10 +1141,12 @@ static void yaml_tree_scalars(void **state) {
     assert_int_equal(loadid_yaml_get_double(r, "d5", &d), -EINVAL);
     assert_string_equal(loadid_yaml_error(doc), "t.yaml:16: d5: expected a number, got '0x10'");
     assert_int_equal(loadid_yaml_get_double(r, "d6", &d), -EINVAL);
-    assert_string_equal(loadid_yaml_error(doc), "t.yaml:17: d6: expected a number, got the string \"3\"");
+    assert_string_equal(loadid_yaml_error(doc),
+                        "t.yaml:17: d6: expected a number, got the string \"3\"");
     assert_int_equal(loadid_yaml_get_double(r, "d7", &d), -EINVAL);
     assert_int_equal(loadid_yaml_get_double(r, "d8", &d), -EINVAL);
-    assert_string_equal(loadid_yaml_error(doc), "t.yaml:19: d8: expected a finite number, got '+.INF'");
+    assert_string_equal(loadid_yaml_error(doc),
+                        "t.yaml:19: d8: expected a finite number, got '+.INF'");
     assert_true(d == 1); /* failures wrote nothing */
 
     assert_int_equal(loadid_yaml_get_string(r, "s1", s, sizeof s), 1);
@@ -1133,7 +1162,8 @@ static void yaml_tree_scalars(void **state) {
     assert_int_equal(loadid_yaml_get_string(r, "n2", s, sizeof s), -EINVAL);
     /* A block scalar: the error message stays on one line. */
     assert_int_equal(loadid_yaml_get_double(r, "l", &d), -EINVAL);
-    assert_string_equal(loadid_yaml_error(doc), "t.yaml:25: l: expected a number, got the string \"two?lines?\"");
+    assert_string_equal(loadid_yaml_error(doc),
+                        "t.yaml:25: l: expected a number, got the string \"two?lines?\"");
     /* Getters on something that is not a mapping. */
     assert_int_equal(loadid_yaml_get_double(loadid_yaml_get(r, "d1"), "x", &d), -EINVAL);
     assert_string_equal(loadid_yaml_error(doc), "t.yaml:12: d1: expected a mapping, got '7'");
@@ -1155,8 +1185,9 @@ static void yaml_tree_refuses(void **state) {
     assert_prefix(err, "d.yaml:1: ");
     assert_non_null(strstr(err, ": nested deeper than 64 levels"));
     /* A complex key. */
-    assert_int_equal(loadid_yaml_load_string("k.yaml", "a: 1\n? [x]\n: 2\n", 15, &doc, err, sizeof err),
-                     -EINVAL);
+    assert_int_equal(
+        loadid_yaml_load_string("k.yaml", "a: 1\n? [x]\n: 2\n", 15, &doc, err, sizeof err),
+        -EINVAL);
     assert_string_equal(err, "k.yaml:2: (top level): a key must be a scalar, not a sequence");
     /* Text that is not NUL-terminated is read up to len. */
     assert_int_equal(loadid_yaml_load_string("n.yaml", "a: 12345", 5, &doc, err, sizeof err), 0);
@@ -1173,8 +1204,10 @@ static void lcm_command_sources(void **state) {
     (void)state;
     loadid_config_t c;
     warnings_t w;
-    load_ok(write_file("s.yaml", "lcm:\n  command_sources: [127.0.0.1, 10.1.0.0/16, "
-                                 "0.0.0.0/0]\n"), &c, &w);
+    load_ok(write_file("s.yaml",
+                       "lcm:\n  command_sources: [127.0.0.1, 10.1.0.0/16, "
+                       "0.0.0.0/0]\n"),
+            &c, &w);
     assert_int_equal(w.count, 0);
     assert_int_equal(c.lcm_num_command_sources, 3);
     assert_int_equal(c.lcm_command_sources[0].net, 0x7F000001u);

@@ -26,7 +26,8 @@ typedef struct {
     const char *name;
 } code_t;
 
-#define C(code, lo, own) {code, lo - 98, lo, own, #code}
+#define C(code, lo, own) \
+    { code, lo - 98, lo, own, #code }
 static const code_t kCodes[] = {
     C(LOADID_E_NONFINITE, -1001, loadid_strerror),
     C(LOADID_E_NOT_EXCITED, -1001, loadid_strerror),

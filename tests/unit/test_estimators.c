@@ -23,7 +23,11 @@ static const loadid_method_t kAll[] = {LOADID_METHOD_RLS, LOADID_METHOD_RIV, LOA
 #define NALL 5
 
 static const loadid_synth_noise_t kNoiseBoth = {
-    .sigma_f = 0.1, .sigma_tau = 0.005, .sigma_spec = 0.5, .sigma_alpha = 5.0, .sigma_omega = 0.02,
+    .sigma_f = 0.1,
+    .sigma_tau = 0.005,
+    .sigma_spec = 0.5,
+    .sigma_alpha = 5.0,
+    .sigma_omega = 0.02,
     .offset = {2.0, -1.5, 3.0, 0.08, -0.05, 0.03},
 };
 
@@ -90,7 +94,8 @@ static void test_rls_equals_batch_ls_with_noise_in_y(void **state) {
     for (int k = 0; k < d.n_samples; ++k) {
         /* C = A: exact states make instruments and data the same. */
         for (int i = 0; i < 3; ++i)
-            assert_int_equal(loadid_est_update(e[i], dataset_A(&d, k), dataset_A(&d, k), dataset_y(&d, k)), 0);
+            assert_int_equal(
+                loadid_est_update(e[i], dataset_A(&d, k), dataset_A(&d, k), dataset_y(&d, k)), 0);
         if (k % 100 != 99) continue;
         loadid_real_t ref[10], phi[10];
         assert_int_equal(loadid_est_estimate(e[0], ref, NULL), 0);
@@ -99,7 +104,9 @@ static void test_rls_equals_batch_ls_with_noise_in_y(void **state) {
         for (int i = 1; i < 3; ++i) {
             assert_int_equal(loadid_est_estimate(e[i], phi, NULL), 0);
             const double err = max_rel_diff(phi, refd, 10, 0.0);
-            if (k == d.n_samples - 1 || err >= 1e-8) print_message("%s vs LS_BATCH after %d: max rel diff %.2e\n", loadid_method_name(m[i]), k + 1, err);
+            if (k == d.n_samples - 1 || err >= 1e-8)
+                print_message("%s vs LS_BATCH after %d: max rel diff %.2e\n",
+                              loadid_method_name(m[i]), k + 1, err);
             assert_true(err < 1e-8);
         }
     }
@@ -122,9 +129,10 @@ static void test_rls_equals_batch_ls_with_noise_in_y(void **state) {
  * ~ 1e4 with the 1e3 weights of its exact offset columns), and while its
  * noisy early estimates cross zero a purely relative measure is undefined:
  * there elements below floor [parameter units] count absolutely. */
-static void rtls_tracks_batch(int n_params, int n_samples, int init_samples, double tol, double floor,
-                              int every) {
-    dataset_spec_t spec = {.seed = 21, .n_samples = n_samples, .n_params = n_params, .noise = kNoiseBoth};
+static void rtls_tracks_batch(int n_params, int n_samples, int init_samples, double tol,
+                              double floor, int every) {
+    dataset_spec_t spec = {
+        .seed = 21, .n_samples = n_samples, .n_params = n_params, .noise = kNoiseBoth};
     dataset_t d;
     assert_int_equal(dataset_make(&spec, &d), 0);
     loadid_est_config_t cfg;
@@ -168,8 +176,11 @@ static void rtls_tracks_batch(int n_params, int n_samples, int init_samples, dou
         if (err >= tol) ++failures;
         assert_true(serr < 1e-9);
     }
-    print_message("RTLS vs batch TLS, %d params, %d samples (init %d, every %d): %d comparisons, worst phi %.2e, "
-                  "sigma_min %.2e\n", n_params, n_samples, init_samples, every, compared, worst, worst_sigma);
+    print_message(
+        "RTLS vs batch TLS, %d params, %d samples (init %d, every %d): %d comparisons, worst phi "
+        "%.2e, "
+        "sigma_min %.2e\n",
+        n_params, n_samples, init_samples, every, compared, worst, worst_sigma);
     assert_int_equal(failures, 0);
     assert_true(compared > d.n_samples / every - 5);
     loadid_est_destroy(rtls);
@@ -207,7 +218,8 @@ static void test_rtls_equals_batch_tls_offset_model(void **state) {
 /* ---- A repeated smallest singular value, constructed ---- */
 
 /* Orthonormal columns by modified Gram-Schmidt of Gaussian columns. */
-static void random_orthonormal(loadid_rng_t *rng, int rows, int cols, double *Q /* rows x cols, row-major */) {
+static void random_orthonormal(loadid_rng_t *rng, int rows, int cols,
+                               double *Q /* rows x cols, row-major */) {
     for (int j = 0; j < cols; ++j) {
         for (int i = 0; i < rows; ++i) Q[i * cols + j] = loadid_rng_normal(rng);
         for (int pass = 0; pass < 2; ++pass)
@@ -273,8 +285,9 @@ static void check_constructed_spectrum(const double s[11], int expect_p) {
         loadid_est_info_t info;
         assert_int_equal(loadid_est_estimate(e, phi, &info), 0);
         const double err = max_rel_diff(phi, expect, 10, 1e-3);
-        print_message("%s: multiplicity %d (expected %d), sigma_min %.6f, rel err %.2e\n", loadid_method_name(m[i]),
-                      info.sigma_min_multiplicity, expect_p, (double)info.sigma_min, err);
+        print_message("%s: multiplicity %d (expected %d), sigma_min %.6f, rel err %.2e\n",
+                      loadid_method_name(m[i]), info.sigma_min_multiplicity, expect_p,
+                      (double)info.sigma_min, err);
         assert_int_equal(info.sigma_min_multiplicity, expect_p);
         assert_true(fabs(info.sigma_min - s[10]) < 1e-12);
         assert_true(err < 1e-9);
@@ -340,7 +353,11 @@ static void test_degenerate_no_rotation(void **state) {
             loadid_real_t spec[3], zero[3] = {0, 0, 0}, A[60], y[6];
             for (int i = 0; i < 3; ++i) spec[i] = (loadid_real_t)(5 * loadid_rng_normal(&rng));
             assert_int_equal(loadid_regressor(spec, zero, zero, A), 0);
-            assert_int_equal(loadid_regressor_apply(A, 10, (const loadid_real_t[10]){1, .01, .02, .03, 1e-3, 0, 0, 1e-3, 0, 1e-3}, y), 0);
+            assert_int_equal(
+                loadid_regressor_apply(
+                    A, 10, (const loadid_real_t[10]){1, .01, .02, .03, 1e-3, 0, 0, 1e-3, 0, 1e-3},
+                    y),
+                0);
             for (int i = 0; i < 6; ++i) y[i] += (loadid_real_t)(0.01 * loadid_rng_normal(&rng));
             assert_int_equal(loadid_est_update(e, A, A, y), 0);
         }
@@ -447,7 +464,8 @@ static void test_batch_capacity(void **state) {
     assert_int_equal(dataset_feed(&d, e, 0, 50), 0);
     loadid_real_t a[10], b[10];
     assert_int_equal(loadid_est_estimate(e, a, NULL), 0);
-    assert_int_equal(loadid_est_update(e, dataset_A(&d, 50), NULL, dataset_y(&d, 50)), LOADID_E_FULL);
+    assert_int_equal(loadid_est_update(e, dataset_A(&d, 50), NULL, dataset_y(&d, 50)),
+                     LOADID_E_FULL);
     loadid_est_info_t info;
     assert_int_equal(loadid_est_estimate(e, b, &info), 0);
     assert_memory_equal(a, b, sizeof a);
@@ -459,7 +477,8 @@ static void test_batch_capacity(void **state) {
 /* With forgetting, RLS follows a load change; without, it averages. */
 static void test_rls_forgetting_tracks_a_change(void **state) {
     (void)state;
-    static const double load_b[10] = {2.0, 0.02, -0.04, 0.1, 0.012, 0.001, -0.002, 0.015, 0.0005, 0.009};
+    static const double load_b[10] = {2.0,   0.02,   -0.04, 0.1,    0.012,
+                                      0.001, -0.002, 0.015, 0.0005, 0.009};
     dataset_spec_t sa = {.seed = 4, .n_samples = 1000, .n_params = 10};
     dataset_spec_t sb = sa;
     sb.phi = load_b;
@@ -480,7 +499,8 @@ static void test_rls_forgetting_tracks_a_change(void **state) {
         err[f] = max_rel_diff(phi, load_b, 10, 0.0);
         loadid_est_destroy(e);
     }
-    print_message("after a load change: rel err without forgetting %.3g, with 0.98: %.3g\n", err[0], err[1]);
+    print_message("after a load change: rel err without forgetting %.3g, with 0.98: %.3g\n", err[0],
+                  err[1]);
     assert_true(err[0] > 0.05);
     assert_true(err[1] < 1e-6);
     dataset_free(&da);
@@ -497,13 +517,13 @@ static void test_config_validation(void **state) {
     assert_int_equal(loadid_est_config_default(LOADID_METHOD_RTLS, 10, &cfg), 0);
     assert_int_equal(loadid_est_create(NULL, &e), -EINVAL);
     assert_int_equal(loadid_est_create(&cfg, NULL), -EINVAL);
-#define EXPECT_BAD(mutation)                                  \
-    do {                                                      \
-        bad = cfg;                                            \
-        mutation;                                             \
-        e = (loadid_est_t *)&cfg;                             \
+#define EXPECT_BAD(mutation)                                    \
+    do {                                                        \
+        bad = cfg;                                              \
+        mutation;                                               \
+        e = (loadid_est_t *)&cfg;                               \
         assert_int_equal(loadid_est_create(&bad, &e), -EINVAL); \
-        assert_null(e);                                       \
+        assert_null(e);                                         \
     } while (0)
     EXPECT_BAD(bad.n_params = 12);
     EXPECT_BAD(bad.method = (loadid_method_t)0);
@@ -565,7 +585,8 @@ static void jacobi_eigenvalues(double *a, int n, double *lambda) {
                 const double apq = a[p * n + q];
                 if (apq == 0) continue;
                 const double theta = (a[q * n + q] - a[p * n + p]) / (2 * apq);
-                const double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1));
+                const double t =
+                    (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1));
                 const double c = 1 / sqrt(t * t + 1), s = t * c;
                 for (int k = 0; k < n; ++k) { /* columns p, q */
                     const double x = a[k * n + p], y = a[k * n + q];
@@ -612,8 +633,10 @@ static void test_condition_number_every_update(void **state) {
             for (int r = 0; r < 6; ++r)
                 for (int i = 0; i < 10; ++i)
                     for (int j = 0; j < 10; ++j) {
-                        const double wi = (double)A[r * 10 + i] * (double)cfg.col_weight[i] / (double)cfg.row_sigma[r];
-                        const double wj = (double)A[r * 10 + j] * (double)cfg.col_weight[j] / (double)cfg.row_sigma[r];
+                        const double wi = (double)A[r * 10 + i] * (double)cfg.col_weight[i] /
+                                          (double)cfg.row_sigma[r];
+                        const double wj = (double)A[r * 10 + j] * (double)cfg.col_weight[j] /
+                                          (double)cfg.row_sigma[r];
                         ups[i * 10 + j] += wi * wj;
                     }
             loadid_real_t phi[10];
@@ -624,7 +647,8 @@ static void test_condition_number_every_update(void **state) {
             memcpy(a, ups, sizeof a);
             jacobi_eigenvalues(a, 10, l);
             double lmin = l[0], lmax = l[0];
-            for (int i = 1; i < 10; ++i) lmin = l[i] < lmin ? l[i] : lmin, lmax = l[i] > lmax ? l[i] : lmax;
+            for (int i = 1; i < 10; ++i)
+                lmin = l[i] < lmin ? l[i] : lmin, lmax = l[i] > lmax ? l[i] : lmax;
             const double ref = sqrt(lmax / lmin);
             const double err = fabs((double)info.condition_number - ref) / ref;
             if (err > worst) worst = err;
@@ -666,13 +690,15 @@ static void test_rescale_equals_weights_from_the_start(void **state) {
         loadid_est_t *e = NULL;
         assert_int_equal(loadid_est_create(&cfg, &e), 0);
         assert_int_equal(dataset_feed(&d, e, 0, 400), 0);
-        assert_int_equal(loadid_est_rescale(e, (loadid_real_t)f, (loadid_real_t)t, (loadid_real_t)c), 0);
+        assert_int_equal(
+            loadid_est_rescale(e, (loadid_real_t)f, (loadid_real_t)t, (loadid_real_t)c), 0);
         assert_int_equal(dataset_feed(&d, e, 400, d.n_samples), 0);
         loadid_real_t phi[10];
         assert_int_equal(loadid_est_estimate(e, phi, NULL), 0);
         const double err = max_rel_diff(phi, refd, 10, 1e-3);
-        print_message("%s rescaled after 400 samples vs weighted so from the start: max rel diff %.2e\n",
-                      loadid_method_name(methods[m]), err);
+        print_message(
+            "%s rescaled after 400 samples vs weighted so from the start: max rel diff %.2e\n",
+            loadid_method_name(methods[m]), err);
         assert_true(err < 1e-9);
         assert_int_equal(loadid_est_rescale(e, 0, 1, 1), -EINVAL);
         loadid_est_destroy(e);
@@ -720,17 +746,23 @@ static void test_residual_scales(void **state) {
         for (int k = 0; k < d.n_samples; ++k)
             for (int r = 0; r < 6; ++r) {
                 double z = 0;
-                for (int j = 0; j < 10; ++j) z += (double)dataset_A(&d, k)[r * 10 + j] * (double)cfg.col_weight[j] * v[j];
+                for (int j = 0; j < 10; ++j)
+                    z += (double)dataset_A(&d, k)[r * 10 + j] * (double)cfg.col_weight[j] * v[j];
                 z += (double)dataset_y(&d, k)[r] * (double)cfg.col_weight[10] * v[10];
                 z /= (double)cfg.row_sigma[r];
                 ss[r / 3] += z * z;
             }
-        const double ref_f = sqrt(ss[0] / (3.0 * d.n_samples)), ref_t = sqrt(ss[1] / (3.0 * d.n_samples));
+        const double ref_f = sqrt(ss[0] / (3.0 * d.n_samples)),
+                     ref_t = sqrt(ss[1] / (3.0 * d.n_samples));
         print_message("%s weights: residual scales force %.4f torque %.4f (here %.4f %.4f)\n",
-                      wrong ? "force 3x too small" : "true", (double)sc[0], (double)sc[1], ref_f, ref_t);
-        assert_true(fabs((double)sc[0] - ref_f) < 1e-7 * ref_f && fabs((double)sc[1] - ref_t) < 1e-7 * ref_t);
-        if (wrong) assert_true(sc[0] > 2.4 && sc[0] < 3.6 && sc[1] > 0.8 && sc[1] < 1.25);
-        else assert_true(sc[0] > 0.8 && sc[0] < 1.25 && sc[1] > 0.8 && sc[1] < 1.25);
+                      wrong ? "force 3x too small" : "true", (double)sc[0], (double)sc[1], ref_f,
+                      ref_t);
+        assert_true(fabs((double)sc[0] - ref_f) < 1e-7 * ref_f &&
+                    fabs((double)sc[1] - ref_t) < 1e-7 * ref_t);
+        if (wrong)
+            assert_true(sc[0] > 2.4 && sc[0] < 3.6 && sc[1] > 0.8 && sc[1] < 1.25);
+        else
+            assert_true(sc[0] > 0.8 && sc[0] < 1.25 && sc[1] > 0.8 && sc[1] < 1.25);
         loadid_est_destroy(e);
     }
     dataset_free(&d);
@@ -765,11 +797,12 @@ static void test_exact_columns_keep_the_excitation_gate(void **state) {
             c.col_weight[j] *= (loadid_real_t)e, c.col_exact[j] = (loadid_real_t)e;
         }
         assert_int_equal(dataset_estimate(&d, &c, phi, &mixed), 0);
-        print_message("%-9s kappa %.6g / %.6g (uniform) / %.6g (mixed); noise ratio %.6g / %.6g / "
-                      "%.6g, without col_exact %.3g\n", loadid_method_name(kAll[m]),
-                      (double)base.condition_number, (double)uni.condition_number,
-                      (double)mixed.condition_number, (double)base.noise_ratio,
-                      (double)uni.noise_ratio, (double)mixed.noise_ratio, (double)bare.noise_ratio);
+        print_message(
+            "%-9s kappa %.6g / %.6g (uniform) / %.6g (mixed); noise ratio %.6g / %.6g / "
+            "%.6g, without col_exact %.3g\n",
+            loadid_method_name(kAll[m]), (double)base.condition_number,
+            (double)uni.condition_number, (double)mixed.condition_number, (double)base.noise_ratio,
+            (double)uni.noise_ratio, (double)mixed.noise_ratio, (double)bare.noise_ratio);
         const double tol = sizeof(loadid_real_t) == sizeof(float) ? 1e-3 : 1e-7;
         assert_true(fabs(uni.condition_number / base.condition_number - 1) < tol);
         assert_true(fabs(uni.noise_ratio / base.noise_ratio - 1) < tol);

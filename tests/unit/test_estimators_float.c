@@ -52,7 +52,11 @@ static void test_exact_data_float(void **state) {
 static void test_rtls_tracks_batch_float(void **state) {
     (void)state;
     const loadid_synth_noise_t noise = {
-        .sigma_f = 0.1, .sigma_tau = 0.005, .sigma_spec = 0.5, .sigma_alpha = 5.0, .sigma_omega = 0.02,
+        .sigma_f = 0.1,
+        .sigma_tau = 0.005,
+        .sigma_spec = 0.5,
+        .sigma_alpha = 5.0,
+        .sigma_omega = 0.02,
     };
     dataset_spec_t spec = {.seed = 21, .n_samples = 1500, .n_params = 10, .noise = noise};
     dataset_t d;
@@ -84,8 +88,10 @@ static void test_rtls_tracks_batch_float(void **state) {
         if (err > worst) worst = err;
         ++compared;
     }
-    print_message("float RTLS vs batch TLS over %d samples: %d published estimates compared, worst rel diff %.2e\n",
-                  d.n_samples, compared, worst);
+    print_message(
+        "float RTLS vs batch TLS over %d samples: %d published estimates compared, worst rel diff "
+        "%.2e\n",
+        d.n_samples, compared, worst);
     assert_true(compared >= 10);
     assert_true(worst < 2e-4); /* seen 5.1e-5 */
     /* And both estimate the load: mass within 2 %. */
@@ -103,12 +109,17 @@ static void test_rtls_tracks_batch_float(void **state) {
 static void test_recursive_methods_noisy_float(void **state) {
     (void)state;
     const loadid_synth_noise_t noise = {
-        .sigma_f = 0.1, .sigma_tau = 0.005, .sigma_spec = 0.5, .sigma_alpha = 5.0, .sigma_omega = 0.02,
+        .sigma_f = 0.1,
+        .sigma_tau = 0.005,
+        .sigma_spec = 0.5,
+        .sigma_alpha = 5.0,
+        .sigma_omega = 0.02,
     };
     dataset_spec_t spec = {.seed = 33, .n_samples = 1500, .n_params = 10, .noise = noise};
     dataset_t d;
     assert_int_equal(dataset_make(&spec, &d), 0);
-    const loadid_method_t m[4] = {LOADID_METHOD_LS_BATCH, LOADID_METHOD_RLS, LOADID_METHOD_RIV, LOADID_METHOD_RTLS};
+    const loadid_method_t m[4] = {LOADID_METHOD_LS_BATCH, LOADID_METHOD_RLS, LOADID_METHOD_RIV,
+                                  LOADID_METHOD_RTLS};
     loadid_real_t phi[4][10];
     for (int i = 0; i < 4; ++i) {
         loadid_est_config_t cfg;
@@ -118,8 +129,8 @@ static void test_recursive_methods_noisy_float(void **state) {
     double ls[10];
     for (int j = 0; j < 10; ++j) ls[j] = phi[0][j];
     const double rls_vs_ls = max_rel_diff(phi[1], ls, 10, 1e-4);
-    print_message("float, noisy: RLS vs LS_BATCH %.2e; masses RLS %.4f RIV %.4f RTLS %.4f\n", rls_vs_ls,
-                  (double)phi[1][0], (double)phi[2][0], (double)phi[3][0]);
+    print_message("float, noisy: RLS vs LS_BATCH %.2e; masses RLS %.4f RIV %.4f RTLS %.4f\n",
+                  rls_vs_ls, (double)phi[1][0], (double)phi[2][0], (double)phi[3][0]);
     assert_true(rls_vs_ls < 5e-5); /* seen 1.2e-5 */
     /* RIV (noise-free instruments) and RTLS are consistent: mass within 1 %. */
     assert_true(fabs(phi[2][0] - 1.0) < 0.01);

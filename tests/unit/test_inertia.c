@@ -26,18 +26,18 @@ _Static_assert(sizeof(loadid_real_t) == sizeof(double), "these tests link the do
 #define REL_TOL 1e-12
 #define N_RANDOM_BODIES 2000
 
-#define ALL_FLAGS                                                                      \
+#define ALL_FLAGS                                                                        \
     (LOADID_PHYS_MASS_NOT_POSITIVE | LOADID_PHYS_INERTIA_NOT_PD | LOADID_PHYS_TRIANGLE | \
      LOADID_PHYS_PSEUDO_INERTIA_NOT_PD)
 
-#define ASSERT_FLAGS(got, want, what)                                                          \
-    do {                                                                                       \
-        const int got_f_ = (got), want_f_ = (want);                                            \
-        if (got_f_ != want_f_) {                                                               \
-            print_error("%s: violations 0x%x, expected 0x%x\n", (what), (unsigned)got_f_,      \
-                        (unsigned)want_f_);                                                    \
-            fail();                                                                            \
-        }                                                                                      \
+#define ASSERT_FLAGS(got, want, what)                                                     \
+    do {                                                                                  \
+        const int got_f_ = (got), want_f_ = (want);                                       \
+        if (got_f_ != want_f_) {                                                          \
+            print_error("%s: violations 0x%x, expected 0x%x\n", (what), (unsigned)got_f_, \
+                        (unsigned)want_f_);                                               \
+            fail();                                                                       \
+        }                                                                                 \
     } while (0)
 
 typedef double mat3_t[3][3];
@@ -193,10 +193,16 @@ static void test_round_trip_random_bodies(void **state) {
         assert_int_equal(loadid_phi_from_physical(b.mass, b.com, ic6, phi_lib), 0);
         body_phi(&b, phi_hand);
         /* from_physical agrees with the hand-made parallel axis */
-        const double phi_scale[10] = {b.mass, b.mass * 0.15, b.mass * 0.15, b.mass * 0.15,
-                                      max_abs(phi_hand + 4, 6), max_abs(phi_hand + 4, 6),
-                                      max_abs(phi_hand + 4, 6), max_abs(phi_hand + 4, 6),
-                                      max_abs(phi_hand + 4, 6), max_abs(phi_hand + 4, 6)};
+        const double phi_scale[10] = {b.mass,
+                                      b.mass * 0.15,
+                                      b.mass * 0.15,
+                                      b.mass * 0.15,
+                                      max_abs(phi_hand + 4, 6),
+                                      max_abs(phi_hand + 4, 6),
+                                      max_abs(phi_hand + 4, 6),
+                                      max_abs(phi_hand + 4, 6),
+                                      max_abs(phi_hand + 4, 6),
+                                      max_abs(phi_hand + 4, 6)};
         for (int i = 0; i < 10; ++i) {
             const double e = fabs(phi_lib[i] - phi_hand[i]) / phi_scale[i];
             if (e > worst_phi) worst_phi = e;
@@ -213,7 +219,8 @@ static void test_round_trip_random_bodies(void **state) {
             if (fabs(ph.com[i] - b.com[i]) / com_scale > worst_com)
                 worst_com = fabs(ph.com[i] - b.com[i]) / com_scale;
         }
-        if (fabs(ph.mass - b.mass) / b.mass > worst_mass) worst_mass = fabs(ph.mass - b.mass) / b.mass;
+        if (fabs(ph.mass - b.mass) / b.mass > worst_mass)
+            worst_mass = fabs(ph.mass - b.mass) / b.mass;
         /* Inertia and eigenvalues: relative to the largest principal moment
          * (the norm of the tensor; Weyl's bound for the eigenvalues). */
         const double iscale = b.principal[2];
@@ -228,9 +235,10 @@ static void test_round_trip_random_bodies(void **state) {
                 worst_p = fabs(ph.principal[i] - b.principal[i]) / iscale;
         }
     }
-    print_message("round trip, %d bodies: worst relative error phi %.3g, mass %.3g, com %.3g, "
-                  "inertia_com %.3g, principal %.3g\n",
-                  N_RANDOM_BODIES, worst_phi, worst_mass, worst_com, worst_ic, worst_p);
+    print_message(
+        "round trip, %d bodies: worst relative error phi %.3g, mass %.3g, com %.3g, "
+        "inertia_com %.3g, principal %.3g\n",
+        N_RANDOM_BODIES, worst_phi, worst_mass, worst_com, worst_ic, worst_p);
 }
 
 /* ------------------------------------------------------------ solid box */
@@ -281,7 +289,10 @@ static void check_box(double m, const double sides[3], const double c0[3], const
     box_phi_point_masses(m, sides, c0, R, phi_pm);
     const double iscale = max_abs(phi + 4, 6);
     for (int i = 0; i < 10; ++i)
-        ASSERT_CLOSE(phi_pm[i], phi[i], 1e-13 * (i == 0 ? m : i < 4 ? m * 0.15 : iscale),
+        ASSERT_CLOSE(phi_pm[i], phi[i],
+                     1e-13 * (i == 0  ? m
+                              : i < 4 ? m * 0.15
+                                      : iscale),
                      "box: point masses vs formula");
 
     memcpy(expected, d, sizeof expected);
@@ -405,10 +416,10 @@ static void test_violation_negative_moment(void **state) {
         loadid_physical_t ph;
         body_t b;
         physical_of_moments(&rng, uniform_in(&rng, 0.1, 5.0), p, &ph, &b);
-        ASSERT_FLAGS(ph.violations,
-                     LOADID_PHYS_INERTIA_NOT_PD | LOADID_PHYS_TRIANGLE |
-                         LOADID_PHYS_PSEUDO_INERTIA_NOT_PD,
-                     "principal (-0.5, 2, 3) 1e-3");
+        ASSERT_FLAGS(
+            ph.violations,
+            LOADID_PHYS_INERTIA_NOT_PD | LOADID_PHYS_TRIANGLE | LOADID_PHYS_PSEUDO_INERTIA_NOT_PD,
+            "principal (-0.5, 2, 3) 1e-3");
         ASSERT_CLOSE(ph.principal[0], -0.5e-3, REL_TOL * 3e-3, "negative principal moment");
     }
 }
@@ -431,8 +442,7 @@ static void test_thin_rod_borderline(void **state) {
         const double phi[10] = {1.0, 0, 0, 0, rod[0], 0, 0, rod[1], 0, rod[2]};
         loadid_physical_t ph;
         to_physical_ok(phi, &ph);
-        ASSERT_FLAGS(ph.violations,
-                     LOADID_PHYS_INERTIA_NOT_PD | LOADID_PHYS_PSEUDO_INERTIA_NOT_PD,
+        ASSERT_FLAGS(ph.violations, LOADID_PHYS_INERTIA_NOT_PD | LOADID_PHYS_PSEUDO_INERTIA_NOT_PD,
                      "thin rod (1e-12, 1, 1) 1e-3 at the origin");
         ASSERT_CLOSE(ph.principal[0], 1e-15, 1e-20, "thin rod: axial moment");
     }
@@ -440,8 +450,7 @@ static void test_thin_rod_borderline(void **state) {
         loadid_physical_t ph;
         body_t b;
         physical_of_moments(&rng, 1.0, rod, &ph, &b);
-        ASSERT_FLAGS(ph.violations,
-                     LOADID_PHYS_INERTIA_NOT_PD | LOADID_PHYS_PSEUDO_INERTIA_NOT_PD,
+        ASSERT_FLAGS(ph.violations, LOADID_PHYS_INERTIA_NOT_PD | LOADID_PHYS_PSEUDO_INERTIA_NOT_PD,
                      "thin rod (1e-12, 1, 1) 1e-3, rotated and moved");
         physical_of_moments(&rng, 1.0, thicker, &ph, &b);
         ASSERT_FLAGS(ph.violations, 0, "rod (1e-4, 1, 1) 1e-3, rotated and moved");
@@ -480,9 +489,10 @@ static void test_flags_match_principal_moments(void **state) {
         body_t b;
         physical_of_moments(&rng, m, p, &ph, &b);
         if (ph.violations != want) {
-            print_error("sample %d: m %g, principal %.6g %.6g %.6g: violations 0x%x, expected "
-                        "0x%x\n",
-                        k, m, s[0], s[1], s[2], (unsigned)ph.violations, (unsigned)want);
+            print_error(
+                "sample %d: m %g, principal %.6g %.6g %.6g: violations 0x%x, expected "
+                "0x%x\n",
+                k, m, s[0], s[1], s[2], (unsigned)ph.violations, (unsigned)want);
             fail();
         }
         ++n_checked;
@@ -508,7 +518,8 @@ static void test_paper_load_o1(void **state) {
     const double *phi = loadid_synth_phi_o1;
     const double m = phi[0];
     const double c[3] = {phi[1] / m, phi[2] / m, phi[3] / m};
-    const mat3_t Is = {{phi[4], phi[5], phi[6]}, {phi[5], phi[7], phi[8]}, {phi[6], phi[8], phi[9]}};
+    const mat3_t Is = {
+        {phi[4], phi[5], phi[6]}, {phi[5], phi[7], phi[8]}, {phi[6], phi[8], phi[9]}};
     mat3_t St, Ic;
     steiner(m, c, St);
     for (int i = 0; i < 3; ++i)
@@ -524,12 +535,13 @@ static void test_paper_load_o1(void **state) {
     print_message("o1: inertia_com [xx xy xz yy yz zz] = [%.6g %.6g %.6g %.6g %.6g %.6g] kg m^2\n",
                   ph.inertia_com[0], ph.inertia_com[1], ph.inertia_com[2], ph.inertia_com[3],
                   ph.inertia_com[4], ph.inertia_com[5]);
-    print_message("o1: principal moments [%.6g %.6g %.6g] kg m^2, I1 + I2 - I3 = %.4g kg m^2 "
-                  "(%.3g %% of I3), violations 0x%x\n",
-                  ph.principal[0], ph.principal[1], ph.principal[2],
-                  ph.principal[0] + ph.principal[1] - ph.principal[2],
-                  100.0 * (ph.principal[0] + ph.principal[1] - ph.principal[2]) / ph.principal[2],
-                  (unsigned)ph.violations);
+    print_message(
+        "o1: principal moments [%.6g %.6g %.6g] kg m^2, I1 + I2 - I3 = %.4g kg m^2 "
+        "(%.3g %% of I3), violations 0x%x\n",
+        ph.principal[0], ph.principal[1], ph.principal[2],
+        ph.principal[0] + ph.principal[1] - ph.principal[2],
+        100.0 * (ph.principal[0] + ph.principal[1] - ph.principal[2]) / ph.principal[2],
+        (unsigned)ph.violations);
 
     ASSERT_CLOSE(ph.mass, 1.0, 0.0, "o1 mass");
     for (int i = 0; i < 3; ++i) ASSERT_CLOSE(ph.com[i], c[i], 1e-15, "o1 com");
@@ -542,9 +554,10 @@ static void test_paper_load_o1(void **state) {
     if (margin < -1e-9 * p[2]) want |= LOADID_PHYS_TRIANGLE;
     if (!(margin > 1e-9 * p[2])) want |= LOADID_PHYS_PSEUDO_INERTIA_NOT_PD;
     if (want != 0)
-        print_message("o1 is NOT physically consistent as published: its principal moments "
-                      "about the COM break I1 + I2 >= I3 by %.4g kg m^2\n",
-                      -margin);
+        print_message(
+            "o1 is NOT physically consistent as published: its principal moments "
+            "about the COM break I1 + I2 >= I3 by %.4g kg m^2\n",
+            -margin);
     ASSERT_FLAGS(ph.violations, want, "o1 flags vs the independent triangle check");
 }
 
@@ -607,7 +620,8 @@ static void test_distal_subtraction(void **state) {
         ASSERT_CLOSE(ph.mass, M, REL_TOL * M, "composite mass");
         for (int i = 0; i < 3; ++i) {
             ASSERT_CLOSE(ph.com[i], c[i], REL_TOL * 0.15, "composite COM");
-            if (fabs(ph.com[i] - c[i]) / 0.15 > worst_com) worst_com = fabs(ph.com[i] - c[i]) / 0.15;
+            if (fabs(ph.com[i] - c[i]) / 0.15 > worst_com)
+                worst_com = fabs(ph.com[i] - c[i]) / 0.15;
         }
         for (int i = 0; i < 6; ++i) {
             ASSERT_CLOSE(ph.inertia_com[i], ic6[i], REL_TOL * p[2], "composite inertia_com");
@@ -617,9 +631,10 @@ static void test_distal_subtraction(void **state) {
         for (int i = 0; i < 3; ++i)
             ASSERT_CLOSE(ph.principal[i], p[i], REL_TOL * p[2], "composite principal");
     }
-    print_message("distal: worst relative error subtract %.3g, composite COM %.3g, composite "
-                  "inertia_com %.3g\n",
-                  worst_sub, worst_com, worst_ic);
+    print_message(
+        "distal: worst relative error subtract %.3g, composite COM %.3g, composite "
+        "inertia_com %.3g\n",
+        worst_sub, worst_com, worst_ic);
 }
 
 /* ----------------------------------------------------------- eq. (37) */
@@ -671,8 +686,8 @@ static void test_inertia_bad_input(void **state) {
             loadid_physical_t ph;
             const int rc = loadid_phi_to_physical(phi, &ph);
             if (rc != LOADID_E_NONFINITE) {
-                print_error("phi[%d] = %g: rc %d, expected LOADID_E_NONFINITE\n", i,
-                            bad_values[b], rc);
+                print_error("phi[%d] = %g: rc %d, expected LOADID_E_NONFINITE\n", i, bad_values[b],
+                            rc);
                 fail();
             }
         }

@@ -47,9 +47,24 @@ static void parses_addresses_and_blocks(void **state) {
 static void refuses_malformed_text(void **state) {
     (void)state;
     static const char *const bad[] = {
-        "", "/8", "10.0.0", "10.0.0.0.1", "10.0.0.256", "10.0.0.1/", "10.0.0.1/33",
-        "10.0.0.1/-1", "10.0.0.1/+8", "10.0.0.1/ 8", "10.0.0.1/8x", "10.0.0.1/008",
-        "10.0.0.1 ", " 10.0.0.1", "10.0.0.1/8/8", "robot-pc", "::1", "0x7f.0.0.1",
+        "",
+        "/8",
+        "10.0.0",
+        "10.0.0.0.1",
+        "10.0.0.256",
+        "10.0.0.1/",
+        "10.0.0.1/33",
+        "10.0.0.1/-1",
+        "10.0.0.1/+8",
+        "10.0.0.1/ 8",
+        "10.0.0.1/8x",
+        "10.0.0.1/008",
+        "10.0.0.1 ",
+        " 10.0.0.1",
+        "10.0.0.1/8/8",
+        "robot-pc",
+        "::1",
+        "0x7f.0.0.1",
         "1234567890123456789",
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
@@ -70,13 +85,13 @@ static void matches_the_listed_senders_only(void **state) {
     loadid_ipv4_net_t list[2];
     assert_int_equal(loadid_ipv4_net_parse("127.0.0.1", &list[0]), 0);
     assert_int_equal(loadid_ipv4_net_parse("192.168.1.128/25", &list[1]), 0);
-    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0x7F000001u), 1);   /* 127.0.0.1 */
-    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0x7F000002u), 0);   /* 127.0.0.2 */
-    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0xC0A80180u), 1);   /* .128: first */
-    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0xC0A801FFu), 1);   /* .255: last */
-    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0xC0A8017Fu), 0);   /* .127: below */
-    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0xC0A80280u), 0);   /* next /24 */
-    assert_int_equal(loadid_ipv4_allow_match(list, 1, 0xC0A80180u), 0);   /* only the first */
+    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0x7F000001u), 1); /* 127.0.0.1 */
+    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0x7F000002u), 0); /* 127.0.0.2 */
+    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0xC0A80180u), 1); /* .128: first */
+    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0xC0A801FFu), 1); /* .255: last */
+    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0xC0A8017Fu), 0); /* .127: below */
+    assert_int_equal(loadid_ipv4_allow_match(list, 2, 0xC0A80280u), 0); /* next /24 */
+    assert_int_equal(loadid_ipv4_allow_match(list, 1, 0xC0A80180u), 0); /* only the first */
     /* No list: every sender (the default). */
     assert_int_equal(loadid_ipv4_allow_match(NULL, 0, 0x08080808u), 1);
     /* 0.0.0.0/0 in a list: every sender too. */
@@ -107,7 +122,8 @@ static void matching_agrees_with_comparing_bit_by_bit(void **state) {
         loadid_ipv4_net_t n;
         assert_int_equal(loadid_ipv4_net_parse(text, &n), 0);
         /* Half the addresses near the block (a few low bits flipped), half anywhere. */
-        const uint32_t addr = trial % 2 ? net ^ (uint32_t)(next_u64() & 0x3FF) : (uint32_t)next_u64();
+        const uint32_t addr =
+            trial % 2 ? net ^ (uint32_t)(next_u64() & 0x3FF) : (uint32_t)next_u64();
         int same = 1;
         for (unsigned b = 0; b < bits; ++b)
             if (((addr ^ net) & (0x80000000u >> b)) != 0) same = 0;

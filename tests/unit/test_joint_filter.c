@@ -32,24 +32,24 @@
 #define IS_FLOAT (sizeof(loadid_real_t) == sizeof(float))
 
 #define PI 3.14159265358979323846
-#define T0 1700000000000000LL        /* epoch-like time stamps [us] */
-#define N_SAMPLES 3000               /* 3 s at 1 kHz */
-#define SETTLE 50                    /* samples (50 ms) left out of the error figures */
-#define COUNT (2 * PI / 1048576.0)   /* one encoder count [rad]: 2^20 per revolution */
+#define T0 1700000000000000LL      /* epoch-like time stamps [us] */
+#define N_SAMPLES 3000             /* 3 s at 1 kHz */
+#define SETTLE 50                  /* samples (50 ms) left out of the error figures */
+#define COUNT (2 * PI / 1048576.0) /* one encoder count [rad]: 2^20 per revolution */
 
 /* Bounds on the multi-sine (figures measured: see the top). */
-#define QDD_RMS_MAX 1.5         /* filter qdd RMS error [rad/s^2] */
-#define QD_RMS_MAX 2.5e-3       /* filter qd RMS error [rad/s] */
-#define LAG_MAX_MS 3.0          /* filter qdd lag [ms], searched over 0..30 ms */
-#define SMOOTH_FACTOR 3.0       /* filter qdd RMS / smoother qdd RMS at least this */
-#define SMOOTH_LAG_MAX_MS 0.2   /* |smoother qdd lag| [ms], searched over -30..30 ms */
+#define QDD_RMS_MAX 1.5       /* filter qdd RMS error [rad/s^2] */
+#define QD_RMS_MAX 2.5e-3     /* filter qd RMS error [rad/s] */
+#define LAG_MAX_MS 3.0        /* filter qdd lag [ms], searched over 0..30 ms */
+#define SMOOTH_FACTOR 3.0     /* filter qdd RMS / smoother qdd RMS at least this */
+#define SMOOTH_LAG_MAX_MS 0.2 /* |smoother qdd lag| [ms], searched over -30..30 ms */
 
 /* ------------------------------------------------------------ trajectory */
 
 /* q(t) = 0.4 + sum a_i sin(2 pi f_i t + phi_i): a robot joint, 0.5-2 Hz. */
-static const double kAmp[3] = {0.8, 0.5, 0.3};      /* [rad] */
-static const double kFreq[3] = {0.5, 1.1, 2.0};    /* [Hz] */
-static const double kPhase[3] = {0.3, 1.2, 2.5};   /* [rad] */
+static const double kAmp[3] = {0.8, 0.5, 0.3};   /* [rad] */
+static const double kFreq[3] = {0.5, 1.1, 2.0};  /* [Hz] */
+static const double kPhase[3] = {0.3, 1.2, 2.5}; /* [rad] */
 
 /* The order-th time derivative of q at t [s] (order 0..3), exactly. */
 static double traj(double t, int order) {
@@ -61,14 +61,18 @@ static double traj(double t, int order) {
     return s;
 }
 
-static double seconds_of(int64_t t_us) { return (double)(t_us - T0) * 1e-6; }
+static double seconds_of(int64_t t_us) {
+    return (double)(t_us - T0) * 1e-6;
+}
 
-static double quantise(double q) { return round(q / COUNT) * COUNT; }
+static double quantise(double q) {
+    return round(q / COUNT) * COUNT;
+}
 
 typedef struct {
     int n;
     int64_t t[N_SAMPLES];
-    loadid_real_t z[N_SAMPLES];  /* encoder positions */
+    loadid_real_t z[N_SAMPLES]; /* encoder positions */
 } series_t;
 
 /* 1 kHz from T0, each stamp moved by a uniform integer in [-jitter, jitter]
@@ -78,14 +82,15 @@ static void make_series(series_t *s, int jitter_us, uint64_t seed) {
     loadid_rng_seed(&rng, seed);
     s->n = N_SAMPLES;
     for (int k = 0; k < N_SAMPLES; ++k) {
-        const int64_t j = jitter_us ? (int64_t)floor(uniform_in(&rng, -jitter_us, jitter_us + 1)) : 0;
+        const int64_t j =
+            jitter_us ? (int64_t)floor(uniform_in(&rng, -jitter_us, jitter_us + 1)) : 0;
         s->t[k] = T0 + 1000LL * k + j;
         s->z[k] = (loadid_real_t)quantise(traj(seconds_of(s->t[k]), 0));
     }
 }
 
 typedef struct {
-    loadid_real_t x[3][N_SAMPLES];  /* q, qd, qdd per sample */
+    loadid_real_t x[3][N_SAMPLES]; /* q, qd, qdd per sample */
 } estimate_t;
 
 /* The on-line filter, read at each sample's time just after its update. */
@@ -103,7 +108,8 @@ static loadid_real_t g_work[9 * N_SAMPLES];
 
 static void run_smoother(const loadid_jf_config_t *cfg, const series_t *s, estimate_t *e) {
     assert_true(loadid_jf_smooth_work_size((size_t)s->n) <= sizeof g_work / sizeof *g_work);
-    assert_int_equal(loadid_jf_smooth(cfg, (size_t)s->n, s->t, s->z, g_work, e->x[0], e->x[1], e->x[2]), 0);
+    assert_int_equal(
+        loadid_jf_smooth(cfg, (size_t)s->n, s->t, s->z, g_work, e->x[0], e->x[1], e->x[2]), 0);
 }
 
 /* RMS over samples [k0, k1) of est_k - q^(order)(t_k - delay). */
@@ -163,9 +169,10 @@ static void check_filter_figures(const series_t *s, const char *what) {
     const double qd = rms_error(s, g_filt.x[1], 1, 0, SETTLE, s->n);
     const double q = rms_error(s, g_filt.x[0], 0, 0, SETTLE, s->n);
     const double lag = lag_ms(s, g_filt.x[2], 2, SETTLE, s->n, 0, 30);
-    print_message("%s filter: qdd RMS %.3f rad/s^2 (true %.1f), lag %.1f ms, "
-                  "qd RMS %.2e rad/s, q RMS %.2e rad\n",
-                  what, qdd, true_rms(s, 2, SETTLE, s->n), lag, qd, q);
+    print_message(
+        "%s filter: qdd RMS %.3f rad/s^2 (true %.1f), lag %.1f ms, "
+        "qd RMS %.2e rad/s, q RMS %.2e rad\n",
+        what, qdd, true_rms(s, 2, SETTLE, s->n), lag, qd, q);
     assert_true(qdd < QDD_RMS_MAX);
     assert_true(qd < QD_RMS_MAX);
     assert_true(lag < LAG_MAX_MS);
@@ -196,9 +203,10 @@ static void check_smoother(const series_t *s) {
     const double s_qdd = rms_error(s, g_smooth.x[2], 2, 0, SETTLE, s->n - SETTLE);
     const double s_qd = rms_error(s, g_smooth.x[1], 1, 0, SETTLE, s->n - SETTLE);
     const double lag = lag_ms(s, g_smooth.x[2], 2, SETTLE, s->n - SETTLE, -30, 30);
-    print_message("smoother: qdd RMS %.3f rad/s^2 (filter %.3f), lag %.1f ms, "
-                  "qd RMS %.2e rad/s (filter %.2e)\n",
-                  s_qdd, f_qdd, lag, s_qd, f_qd);
+    print_message(
+        "smoother: qdd RMS %.3f rad/s^2 (filter %.3f), lag %.1f ms, "
+        "qd RMS %.2e rad/s (filter %.2e)\n",
+        s_qdd, f_qdd, lag, s_qd, f_qd);
     assert_true(s_qdd * SMOOTH_FACTOR < f_qdd);
     assert_true(s_qd < f_qd);
     assert_true(fabs(lag) <= SMOOTH_LAG_MAX_MS);
@@ -292,7 +300,7 @@ static void ref_step(ref_kf_t *r, double dt, double z, const loadid_jf_config_t 
         for (int j = 0; j < 3; ++j) Q[i][j] = c->jerk_psd * q[i][j], r->P[i][j] += Q[i][j];
     const double S = r->P[0][0] + c->meas_sigma * c->meas_sigma; /* H P H^T + R */
     double K[3];
-    for (int i = 0; i < 3; ++i) K[i] = r->P[i][0] / S;            /* P H^T S^-1 */
+    for (int i = 0; i < 3; ++i) K[i] = r->P[i][0] / S; /* P H^T S^-1 */
     const double innov = z - r->x[0];
     for (int i = 0; i < 3; ++i) r->x[i] += K[i] * innov;
     m3_t IKH, P;
@@ -321,10 +329,13 @@ static void assert_state(const loadid_jf_t *jf, int64_t t, const ref_kf_t *r, in
  * restarts), two joints with different signals and a non-default config. */
 static void test_matches_textbook_kf(void **state) {
     (void)state;
-    const loadid_jf_config_t c = {.jerk_psd = 2e4, .meas_sigma = 3e-6, .init_sigma_vel = 2,
-                                  .init_sigma_acc = 40, .max_step_us = 100000};
-    static const int64_t steps[] = {1000, 250, 3170, 999, 17, 40000, 1, 1000, 500, 12345,
-                                    2000, 100000, 1000, 150000, 800, 1200, 1000, 1000};
+    const loadid_jf_config_t c = {.jerk_psd = 2e4,
+                                  .meas_sigma = 3e-6,
+                                  .init_sigma_vel = 2,
+                                  .init_sigma_acc = 40,
+                                  .max_step_us = 100000};
+    static const int64_t steps[] = {1000,  250,  3170,   999,  17,     40000, 1,    1000, 500,
+                                    12345, 2000, 100000, 1000, 150000, 800,   1200, 1000, 1000};
     loadid_jf_t *jf = NULL;
     assert_int_equal(loadid_jf_create(2, &c, &jf), 0);
     ref_kf_t ref[2];
@@ -332,7 +343,8 @@ static void test_matches_textbook_kf(void **state) {
     for (int k = 0; k < 400; ++k) {
         if (k > 0) t += steps[k % (int)(sizeof steps / sizeof *steps)];
         const double ts = seconds_of(t);
-        const double z[2] = {quantise(traj(ts, 0)), quantise(-0.5 * traj(ts, 0) + 0.1 * sin(37 * ts))};
+        const double z[2] = {quantise(traj(ts, 0)),
+                             quantise(-0.5 * traj(ts, 0) + 0.1 * sin(37 * ts))};
         const loadid_real_t zr[2] = {z[0], z[1]};
         const int64_t prev = loadid_jf_last_time(jf);
         assert_int_equal(loadid_jf_update(jf, t, zr), 0);
@@ -344,8 +356,8 @@ static void test_matches_textbook_kf(void **state) {
                 ref_step(&ref[j], (double)(t - prev) / 1e6, z[j], &c);
         }
         assert_state(jf, t, ref, 2, t);
-        assert_state(jf, t + 333, ref, 2, t);   /* the model's prediction, forwards */
-        assert_state(jf, t - 777, ref, 2, t);   /* and backwards */
+        assert_state(jf, t + 333, ref, 2, t); /* the model's prediction, forwards */
+        assert_state(jf, t - 777, ref, 2, t); /* and backwards */
     }
     loadid_jf_destroy(jf);
 }
@@ -374,7 +386,8 @@ static void test_constant_acceleration(void **state) {
         assert_int_equal(loadid_jf_state_at(twin, far, &v[0], &v[1], &v[2]), 0);
     }
     const int64_t last = t - 1000;
-    const int64_t probes[] = {last, last + 20000, last + 1000000, last - 500000, last - 2000000, T0 - 300000};
+    const int64_t probes[] = {last,          last + 20000,   last + 1000000,
+                              last - 500000, last - 2000000, T0 - 300000};
     for (size_t p = 0; p < sizeof probes / sizeof *probes; ++p) {
         const double ts = seconds_of(probes[p]);
         loadid_real_t q, qd, qdd;
@@ -383,7 +396,8 @@ static void test_constant_acceleration(void **state) {
         ASSERT_CLOSE(qdd, a, tol, "qdd");
         ASSERT_CLOSE(qd, v0 + a * ts, (IS_FLOAT ? 1e-3 : 1e-10) + tol * dt, "qd");
         ASSERT_CLOSE(q, q0 + v0 * ts + a * ts * ts / 2,
-                     (IS_FLOAT ? 1e-5 : 1e-12) + (IS_FLOAT ? 1e-3 : 1e-10) * dt + tol * dt * dt / 2, "q");
+                     (IS_FLOAT ? 1e-5 : 1e-12) + (IS_FLOAT ? 1e-3 : 1e-10) * dt + tol * dt * dt / 2,
+                     "q");
         loadid_real_t tq[3];
         assert_int_equal(loadid_jf_state_at(twin, probes[p], &tq[0], &tq[1], &tq[2]), 0);
         assert_memory_equal(&q, &tq[0], sizeof q);
@@ -420,7 +434,8 @@ static void test_errors(void **state) {
     for (int field = 0; field < 4; ++field)
         for (size_t b = 0; b < sizeof bad / sizeof *bad; ++b) {
             loadid_jf_config_t x = default_config();
-            loadid_real_t *f[4] = {&x.jerk_psd, &x.meas_sigma, &x.init_sigma_vel, &x.init_sigma_acc};
+            loadid_real_t *f[4] = {&x.jerk_psd, &x.meas_sigma, &x.init_sigma_vel,
+                                   &x.init_sigma_acc};
             *f[field] = bad[b];
             assert_int_equal(loadid_jf_create(2, &x, &jf), -EINVAL);
             assert_null(jf);
@@ -495,7 +510,8 @@ static void test_errors(void **state) {
     assert_int_equal(loadid_jf_smooth(&c, 3, ts_ok, zs, g_work, q, qd, qdd), 0);
     assert_int_equal(loadid_jf_smooth(&c, 3, ts_eq, zs, g_work, q, qd, qdd), LOADID_E_TIME_ORDER);
     assert_int_equal(loadid_jf_smooth(&c, 3, ts_back, zs, g_work, q, qd, qdd), LOADID_E_TIME_ORDER);
-    assert_int_equal(loadid_jf_smooth(&c, 3, ts_ok, zs_nan, g_work, q, qd, qdd), LOADID_E_NONFINITE);
+    assert_int_equal(loadid_jf_smooth(&c, 3, ts_ok, zs_nan, g_work, q, qd, qdd),
+                     LOADID_E_NONFINITE);
     assert_int_equal(loadid_jf_smooth(&c, 0, ts_ok, zs, g_work, q, qd, qdd), -EINVAL);
     assert_int_equal(loadid_jf_smooth(NULL, 3, ts_ok, zs, g_work, q, qd, qdd), -EINVAL);
     assert_int_equal(loadid_jf_smooth(&c, 3, NULL, zs, g_work, q, qd, qdd), -EINVAL);
@@ -569,7 +585,8 @@ static void test_steady_sigma_is_the_models_error(void **state) {
     double dl = 0, el = 0;
     long nl = 0;
     static int64_t t[MC_STEPS];
-    static loadid_real_t z[MC_STEPS], work[9 * MC_STEPS], sq[MC_STEPS], sqd[MC_STEPS], sqdd[MC_STEPS];
+    static loadid_real_t z[MC_STEPS], work[9 * MC_STEPS], sq[MC_STEPS], sqd[MC_STEPS],
+        sqdd[MC_STEPS];
     static double truth[MC_STEPS][3];
     double ef[3] = {0}, es[3] = {0};
     long nf = 0, ns = 0;
@@ -593,9 +610,9 @@ static void test_steady_sigma_is_the_models_error(void **state) {
                 assert_int_equal(loadid_jf_lagged_state_at(lagged, t[k - 50], 5000, &lq[k - 50],
                                                            &lqd[k - 50], &lqdd[k - 50]),
                                  k - 50 < loadid_jf_settle_steps(lagged) ? LOADID_E_STALE : 0);
-                assert_int_equal(loadid_jf_lagged_state_at(lagged, t[k - 49], 5000, NULL, NULL, NULL),
-                                 k - 49 < loadid_jf_settle_steps(lagged) ? LOADID_E_STALE
-                                                                         : LOADID_E_NO_DATA);
+                assert_int_equal(
+                    loadid_jf_lagged_state_at(lagged, t[k - 49], 5000, NULL, NULL, NULL),
+                    k - 49 < loadid_jf_settle_steps(lagged) ? LOADID_E_STALE : LOADID_E_NO_DATA);
             } else {
                 assert_int_equal(loadid_jf_lagged_time(lagged), INT64_MIN);
             }
@@ -606,9 +623,11 @@ static void test_steady_sigma_is_the_models_error(void **state) {
                 for (int i = 0; i < 3; ++i) ef[i] += e[i] * e[i];
                 nf++;
             }
-            const double w[3] = {loadid_rng_normal(&rng), loadid_rng_normal(&rng), loadid_rng_normal(&rng)};
+            const double w[3] = {loadid_rng_normal(&rng), loadid_rng_normal(&rng),
+                                 loadid_rng_normal(&rng)};
             const double nx[3] = {x[0] + dt * x[1] + d2 / 2 * x[2], x[1] + dt * x[2], x[2]};
-            for (int i = 0; i < 3; ++i) x[i] = nx[i] + L[i][0] * w[0] + L[i][1] * w[1] + L[i][2] * w[2];
+            for (int i = 0; i < 3; ++i)
+                x[i] = nx[i] + L[i][0] * w[0] + L[i][1] * w[1] + L[i][2] * w[2];
         }
         assert_int_equal(loadid_jf_smooth(&cfg, MC_STEPS, t, z, work, sq, sqd, sqdd), 0);
         for (int k = 100; k < 200; ++k) {
@@ -624,9 +643,10 @@ static void test_steady_sigma_is_the_models_error(void **state) {
     loadid_jf_destroy(lagged);
     dl = sqrt(dl / nl), el = sqrt(el / nl);
     for (int i = 0; i < 3; ++i) ef[i] = sqrt(ef[i] / nf), es[i] = sqrt(es[i] / ns);
-    print_message("steady sigma q, qd, qdd: filter %.3g %.3g %.3g (Monte Carlo %.3g %.3g %.3g), "
-                  "smoother %.3g %.3g %.3g (Monte Carlo %.3g %.3g %.3g)\n",
-                  sf[0], sf[1], sf[2], ef[0], ef[1], ef[2], ss[0], ss[1], ss[2], es[0], es[1], es[2]);
+    print_message(
+        "steady sigma q, qd, qdd: filter %.3g %.3g %.3g (Monte Carlo %.3g %.3g %.3g), "
+        "smoother %.3g %.3g %.3g (Monte Carlo %.3g %.3g %.3g)\n",
+        sf[0], sf[1], sf[2], ef[0], ef[1], ef[2], ss[0], ss[1], ss[2], es[0], es[1], es[2]);
     /* 30000 filter and 20000 smoother errors, correlated over a few ms:
      * their RMS is known to about 2 %. Float rounds q to 6e-8 of 1.7e-6. */
     const double tol = IS_FLOAT ? 0.2 : 0.1;
@@ -635,8 +655,10 @@ static void test_steady_sigma_is_the_models_error(void **state) {
         assert_true(fabs(es[i] / ss[i] - 1) < tol);
     }
     assert_true(ss[2] < 0.5 * sf[2]); /* the smoother's point */
-    print_message("fixed-lag smoother (50 steps): qdd %.3g from the truth, %.3g from the RTS "
-                  "smoother of the whole run\n", el, dl);
+    print_message(
+        "fixed-lag smoother (50 steps): qdd %.3g from the truth, %.3g from the RTS "
+        "smoother of the whole run\n",
+        el, dl);
     /* 50 steps are many times the smoother's memory: the same as RTS, to
      * a few % of its error (seen 1 %); its error is the smoother's. */
     assert_true(dl < 0.05 * ss[2]);
@@ -667,18 +689,20 @@ static void test_noise_sigma_is_the_noise_response(void **state) {
         for (int k = 0; k < 20000; ++k) {
             const int64_t tk = T0 + (int64_t)k * 1000;
             const double ts = k * 1e-3;
-            const loadid_real_t z = (loadid_real_t)(0.2 + 0.5 * ts + a * ts * ts / 2 +
-                                                    r * loadid_rng_normal(&rng));
+            const loadid_real_t z =
+                (loadid_real_t)(0.2 + 0.5 * ts + a * ts * ts / 2 + r * loadid_rng_normal(&rng));
             assert_int_equal(loadid_jf_update(jf, tk, &z), 0);
             if (k < 500 + lag) continue;
             const int j = lag ? k - lag : k;
             const double tj = j * 1e-3;
             loadid_real_t q, qd, qdd;
             if (lag)
-                assert_int_equal(loadid_jf_lagged_state_at(jf, T0 + (int64_t)j * 1000, 5000, &q, &qd, &qdd), 0);
+                assert_int_equal(
+                    loadid_jf_lagged_state_at(jf, T0 + (int64_t)j * 1000, 5000, &q, &qd, &qdd), 0);
             else
                 assert_int_equal(loadid_jf_state_at(jf, tk, &q, &qd, &qdd), 0);
-            const double d[3] = {q - (0.2 + 0.5 * tj + a * tj * tj / 2), qd - (0.5 + a * tj), qdd - a};
+            const double d[3] = {q - (0.2 + 0.5 * tj + a * tj * tj / 2), qd - (0.5 + a * tj),
+                                 qdd - a};
             for (int c = 0; c < 3; ++c) e[c] += d[c] * d[c];
             n++;
         }
@@ -733,8 +757,10 @@ static void test_lagged_between_updates(void **state) {
             }
             loadid_jf_destroy(jf);
             const double q = sqrt(e2[0] / n), qd = sqrt(e2[1] / n), qdd = sqrt(e2[2] / n);
-            print_message("lag %d, %3d us after the update: qdd RMS %.4f rad/s^2 (RTS %.4f), qd "
-                          "%.2e rad/s, q %.2e rad\n", lag, offsets[o], qdd, rts, qd, q);
+            print_message(
+                "lag %d, %3d us after the update: qdd RMS %.4f rad/s^2 (RTS %.4f), qd "
+                "%.2e rad/s, q %.2e rad\n",
+                lag, offsets[o], qdd, rts, qd, q);
             /* 50 steps: the RTS figure (measured 1.00x at every offset); 10
              * steps are not enough for jerk_psd 10 (measured 4x). */
             if (lag == 50) assert_true(qdd < 1.3 * rts + (IS_FLOAT ? 0.02 : 0));
@@ -767,7 +793,8 @@ static int settle_reference(const loadid_jf_config_t *c, double dt) {
                     FP[i][j] = F[i][0] * P[0][j] + F[i][1] * P[1][j] + F[i][2] * P[2][j];
             for (int i = 0; i < 3; ++i)
                 for (int j = 0; j < 3; ++j)
-                    Pp[i][j] = FP[i][0] * F[j][0] + FP[i][1] * F[j][1] + FP[i][2] * F[j][2] + Q[i][j];
+                    Pp[i][j] =
+                        FP[i][0] * F[j][0] + FP[i][1] * F[j][1] + FP[i][2] * F[j][2] + Q[i][j];
             if (pass == 1 && Pp[0][0] <= 1.5 * steady[0] && Pp[1][1] <= 1.5 * steady[1] &&
                 Pp[2][2] <= 1.5 * steady[2])
                 return k;
@@ -815,27 +842,28 @@ static void test_restart_settles_before_serving(void **state) {
         assert_int_equal(loadid_jf_settled(jf), k < cut1 ? k >= settle : k >= cut1 + settle);
         /* The samples the smoother covers now. */
         for (; j < 2000 && T0 + 1000LL * j + 370 <= loadid_jf_lagged_time(jf); ++j) {
-        const int64_t t = T0 + 1000LL * j + 370;
-        loadid_real_t x[3];
-        const int rc = loadid_jf_lagged_state_at(jf, t, 5000, &x[0], &x[1], &x[2]);
-        const int served = t <= s->t[cut0 - 1] + 5000 || t >= s->t[cut1] + 1000LL * settle;
-        expected += !served;
-        if (!served) {
-            assert_int_equal(rc, LOADID_E_STALE);
-            ++refused;
-            continue;
-        }
-        assert_int_equal(rc, 0);
-        const double e = fabs(x[2] - traj(seconds_of(t), 2));
-        double *w = j < cut0 + 5 ? &worst_before : &worst_after;
-        if (e > *w) *w = e;
+            const int64_t t = T0 + 1000LL * j + 370;
+            loadid_real_t x[3];
+            const int rc = loadid_jf_lagged_state_at(jf, t, 5000, &x[0], &x[1], &x[2]);
+            const int served = t <= s->t[cut0 - 1] + 5000 || t >= s->t[cut1] + 1000LL * settle;
+            expected += !served;
+            if (!served) {
+                assert_int_equal(rc, LOADID_E_STALE);
+                ++refused;
+                continue;
+            }
+            assert_int_equal(rc, 0);
+            const double e = fabs(x[2] - traj(seconds_of(t), 2));
+            double *w = j < cut0 + 5 ? &worst_before : &worst_after;
+            if (e > *w) *w = e;
         }
     }
     assert_int_equal(j, 2000);
     loadid_jf_destroy(jf);
-    print_message("0.3 s stall: %lld samples refused (expected %lld); served qdd at most %.3g "
-                  "rad/s^2 off before it, %.3g after\n", (long long)refused, (long long)expected,
-                  worst_before, worst_after);
+    print_message(
+        "0.3 s stall: %lld samples refused (expected %lld); served qdd at most %.3g "
+        "rad/s^2 off before it, %.3g after\n",
+        (long long)refused, (long long)expected, worst_before, worst_after);
     assert_int_equal(expected, 300 - 4 + settle);
     /* Before: the last updates smoothed with the few after them, then
      * propagated up to 5 ms (seen 3.4 rad/s^2 at the end, on 37 RMS).

@@ -29,15 +29,13 @@
 
 /* splitmix64: the test's own generator of bytes and choices. */
 static uint64_t mix_state;
-static uint64_t next_u64(void)
-{
+static uint64_t next_u64(void) {
     uint64_t z = (mix_state += 0x9E3779B97F4A7C15ull);
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     return z ^ (z >> 31);
 }
-static unsigned next_below(unsigned n)
-{
+static unsigned next_below(unsigned n) {
     return (unsigned)(next_u64() % n);
 }
 static double next_unit(void) /* [0, 1) */
@@ -45,8 +43,7 @@ static double next_unit(void) /* [0, 1) */
     return (double)(next_u64() >> 11) * 0x1.0p-53;
 }
 
-static loadid_can_frame_t make_frame(uint32_t id, int64_t t_us, const uint8_t bytes[8])
-{
+static loadid_can_frame_t make_frame(uint32_t id, int64_t t_us, const uint8_t bytes[8]) {
     loadid_can_frame_t f;
     memset(&f, 0, sizeof f);
     f.id = id;
@@ -56,8 +53,7 @@ static loadid_can_frame_t make_frame(uint32_t id, int64_t t_us, const uint8_t by
     return f;
 }
 
-static loadid_jr3_decoder_t *new_decoder(void)
-{
+static loadid_jr3_decoder_t *new_decoder(void) {
     loadid_jr3_config_t cfg;
     loadid_jr3_config_default(&cfg);
     loadid_jr3_decoder_t *dec = NULL;
@@ -66,22 +62,20 @@ static loadid_jr3_decoder_t *new_decoder(void)
     return dec;
 }
 
-static loadid_jr3_stats_t stats_of(const loadid_jr3_decoder_t *dec)
-{
+static loadid_jr3_stats_t stats_of(const loadid_jr3_decoder_t *dec) {
     loadid_jr3_stats_t st;
     assert_int_equal(loadid_jr3_decoder_stats(dec, &st), 0);
     return st;
 }
 
 /* The invariants of loadid_jr3_stats_t. */
-static void check_invariants(const loadid_jr3_stats_t *st)
-{
+static void check_invariants(const loadid_jr3_stats_t *st) {
     assert_int_equal(st->frames_total, st->frames_bad + st->frames_sample + st->frames_duplicate +
                                            st->frames_discarded + st->full_scale_frames);
     assert_int_equal(st->frames_bad, st->frames_unknown_id + st->frames_bad_dlc +
                                          st->frames_malformed + st->frames_reserved);
-    int64_t open = st->samples_started - (st->samples_ok + st->samples_rejected +
-                                          st->samples_incomplete);
+    int64_t open =
+        st->samples_started - (st->samples_ok + st->samples_rejected + st->samples_incomplete);
     assert_true(open == 0 || open == 1);
     assert_true(st->samples_rejected >= st->samples_saturated);
     assert_true(st->samples_rejected >= st->samples_faulty);
@@ -107,14 +101,13 @@ static const uint8_t HAND[4][8] = {
 static const int16_t HAND_COUNTS[4][3] = {
     {16384, -16384, 1}, {8192, -1, 32767}, {4096, -32768, 0}, {100, -100, 16}};
 static const double HAND_SI[4][3] = {
-    {200.0, -200.0, 0.01220703125},                 /* 200/16384 */
-    {6.0, -0.000732421875, 23.999267578125},        /* 12/16384, 32767*12/16384 */
-    {24.525, -196.2, 0.0},                          /* 4096*98.1/16384 = 98.1/4 */
-    {6.103515625, -6.103515625, 0.9765625},         /* 100000/16384, 16000/16384 */
+    {200.0, -200.0, 0.01220703125},          /* 200/16384 */
+    {6.0, -0.000732421875, 23.999267578125}, /* 12/16384, 32767*12/16384 */
+    {24.525, -196.2, 0.0},                   /* 4096*98.1/16384 = 98.1/4 */
+    {6.103515625, -6.103515625, 0.9765625},  /* 100000/16384, 16000/16384 */
 };
 
-static void assert_hand_sample(const loadid_jr3_sample_t *s, int64_t t_us)
-{
+static void assert_hand_sample(const loadid_jr3_sample_t *s, int64_t t_us) {
     assert_int_equal(s->t_us, t_us);
     assert_int_equal(s->sequence, 7);
     assert_false(s->saturated);
@@ -129,8 +122,7 @@ static void assert_hand_sample(const loadid_jr3_sample_t *s, int64_t t_us)
     }
 }
 
-static void test_decode_hand_frames(void **state)
-{
+static void test_decode_hand_frames(void **state) {
     (void)state;
     loadid_jr3_decoder_t *dec = new_decoder();
     loadid_jr3_output_t out;
@@ -169,8 +161,7 @@ static void test_decode_hand_frames(void **state)
     loadid_jr3_decoder_destroy(dec);
 }
 
-static void test_encode_hand_frames(void **state)
-{
+static void test_encode_hand_frames(void **state) {
     (void)state;
     loadid_jr3_config_t cfg;
     loadid_jr3_config_default(&cfg);
@@ -199,8 +190,7 @@ static void test_encode_hand_frames(void **state)
     }
 }
 
-static void test_round_trip_random(void **state)
-{
+static void test_round_trip_random(void **state) {
     (void)state;
     mix_state = 42;
     loadid_jr3_config_t cfg;
@@ -251,8 +241,7 @@ static void test_round_trip_random(void **state)
     loadid_jr3_decoder_destroy(dec);
 }
 
-static void test_saturation(void **state)
-{
+static void test_saturation(void **state) {
     (void)state;
     loadid_jr3_config_t cfg;
     loadid_jr3_config_default(&cfg);
@@ -317,8 +306,7 @@ static void test_saturation(void **state)
     loadid_jr3_decoder_destroy(dec);
 }
 
-static void test_fault(void **state)
-{
+static void test_fault(void **state) {
     (void)state;
     loadid_jr3_config_t cfg;
     loadid_jr3_config_default(&cfg);
@@ -364,8 +352,7 @@ static void test_fault(void **state)
     loadid_jr3_decoder_destroy(dec);
 }
 
-static void test_full_scale_frame_encode(void **state)
-{
+static void test_full_scale_frame_encode(void **state) {
     (void)state;
     loadid_can_frame_t f;
     double sent[3];
@@ -412,8 +399,7 @@ static void test_full_scale_frame_encode(void **state)
 }
 
 static void feed_sample(loadid_jr3_decoder_t *dec, const uint8_t frames[4][8], uint8_t seq,
-                        int expect_rc, loadid_jr3_output_t *out)
-{
+                        int expect_rc, loadid_jr3_output_t *out) {
     int rc = 0;
     for (int g = 0; g < 4; ++g) {
         uint8_t b[8];
@@ -425,8 +411,7 @@ static void feed_sample(loadid_jr3_decoder_t *dec, const uint8_t frames[4][8], u
     assert_int_equal(rc, expect_rc);
 }
 
-static void test_full_scale_override(void **state)
-{
+static void test_full_scale_override(void **state) {
     (void)state;
     loadid_jr3_decoder_t *dec = new_decoder();
     loadid_jr3_output_t out;
@@ -457,8 +442,8 @@ static void test_full_scale_override(void **state)
     assert_int_equal(loadid_jr3_decoder_feed(dec, &f, &out), LOADID_JR3_NONE);
     double fs[4][3];
     assert_int_equal(loadid_jr3_decoder_full_scale(dec, fs), 0);
-    assert_true(fs[0][0] == 100.0 && fs[0][2] == 400.0 && fs[1][0] == 12.0 &&
-                fs[2][1] == 98.1 && fs[3][2] == 1000.0);
+    assert_true(fs[0][0] == 100.0 && fs[0][2] == 400.0 && fs[1][0] == 12.0 && fs[2][1] == 98.1 &&
+                fs[3][2] == 1000.0);
 
     /* Linear 9.81 m/s^2 (981 units): counts 16384 -> 9.81. Arriving between
      * the frames of one sample, it applies to the frames after it. */
@@ -507,8 +492,7 @@ static void test_full_scale_override(void **state)
     loadid_jr3_decoder_destroy(dec);
 }
 
-static void test_malformed_counted(void **state)
-{
+static void test_malformed_counted(void **state) {
     (void)state;
     loadid_jr3_decoder_t *dec = new_decoder();
     loadid_jr3_output_t out;
@@ -612,8 +596,7 @@ static void test_malformed_counted(void **state)
     loadid_jr3_decoder_destroy(dec);
 }
 
-static void test_sequence_wrap_and_gaps(void **state)
-{
+static void test_sequence_wrap_and_gaps(void **state) {
     (void)state;
     loadid_jr3_decoder_t *dec = new_decoder();
     loadid_jr3_output_t out;
@@ -642,16 +625,14 @@ static void test_sequence_wrap_and_gaps(void **state)
     loadid_jr3_decoder_destroy(dec);
 }
 
-static loadid_can_frame_t seq_frame(int g, uint8_t seq)
-{
+static loadid_can_frame_t seq_frame(int g, uint8_t seq) {
     uint8_t b[8];
     memcpy(b, HAND[g], 8);
     b[6] = seq;
     return make_frame(BASE + (uint32_t)g, seq, b);
 }
 
-static void test_incomplete_and_duplicates(void **state)
-{
+static void test_incomplete_and_duplicates(void **state) {
     (void)state;
     loadid_jr3_decoder_t *dec = new_decoder();
     loadid_jr3_output_t out;
@@ -733,8 +714,7 @@ static void test_incomplete_and_duplicates(void **state)
  * every path runs: no crash (ASan/UBSan in the asan build), counters equal
  * the tally of return codes, invariants hold after every frame, and every
  * usable sample is finite and unflagged. */
-static void test_fuzz(void **state)
-{
+static void test_fuzz(void **state) {
     (void)state;
     mix_state = 2024;
     loadid_jr3_config_t cfg;
@@ -819,42 +799,59 @@ static void test_fuzz(void **state)
         }
         int rc = loadid_jr3_decoder_feed(dec, &f, &out);
         switch (rc) {
-        case LOADID_JR3_SAMPLE:
-            ++tally[T_SAMPLE];
-            assert_false(out.sample.saturated);
-            assert_false(out.sample.faulty);
-            for (int g = 0; g < 4; ++g) {
-                assert_int_equal(out.sample.status[g], 0);
-                for (int k = 0; k < 3; ++k) {
-                    assert_true(isfinite(out.sample.value[g][k]));
-                    /* |counts| <= 32768, full scale <= 65535 units. */
-                    assert_true(fabs(out.sample.value[g][k]) <= 2.0 * 6553.5);
+            case LOADID_JR3_SAMPLE:
+                ++tally[T_SAMPLE];
+                assert_false(out.sample.saturated);
+                assert_false(out.sample.faulty);
+                for (int g = 0; g < 4; ++g) {
+                    assert_int_equal(out.sample.status[g], 0);
+                    for (int k = 0; k < 3; ++k) {
+                        assert_true(isfinite(out.sample.value[g][k]));
+                        /* |counts| <= 32768, full scale <= 65535 units. */
+                        assert_true(fabs(out.sample.value[g][k]) <= 2.0 * 6553.5);
+                    }
                 }
-            }
-            break;
-        case LOADID_JR3_E_SATURATED:
-            ++tally[T_SAT];
-            assert_true(out.sample.saturated);
-            assert_false(out.sample.faulty);
-            break;
-        case LOADID_JR3_E_FAULT:
-            ++tally[T_FAULT];
-            assert_true(out.sample.faulty);
-            break;
-        case LOADID_JR3_FULL_SCALE:
-            ++tally[T_FS];
-            assert_true(out.full_scale.group >= 0 && out.full_scale.group < 4);
-            for (int k = 0; k < 3; ++k) {
-                assert_true(out.full_scale.current[k] > 0);
-            }
-            break;
-        case LOADID_JR3_E_DUPLICATE: ++tally[T_DUP]; break;
-        case LOADID_JR3_E_UNKNOWN_ID: ++bad_by_code[0]; ++tally[T_BAD]; break;
-        case LOADID_JR3_E_DLC: ++bad_by_code[1]; ++tally[T_BAD]; break;
-        case LOADID_JR3_E_MALFORMED: ++bad_by_code[2]; ++tally[T_BAD]; break;
-        case LOADID_JR3_E_RESERVED: ++bad_by_code[3]; ++tally[T_BAD]; break;
-        case LOADID_JR3_NONE: ++tally[T_NONE]; break;
-        default: fail_msg("unexpected return %d at frame %d", rc, i);
+                break;
+            case LOADID_JR3_E_SATURATED:
+                ++tally[T_SAT];
+                assert_true(out.sample.saturated);
+                assert_false(out.sample.faulty);
+                break;
+            case LOADID_JR3_E_FAULT:
+                ++tally[T_FAULT];
+                assert_true(out.sample.faulty);
+                break;
+            case LOADID_JR3_FULL_SCALE:
+                ++tally[T_FS];
+                assert_true(out.full_scale.group >= 0 && out.full_scale.group < 4);
+                for (int k = 0; k < 3; ++k) {
+                    assert_true(out.full_scale.current[k] > 0);
+                }
+                break;
+            case LOADID_JR3_E_DUPLICATE:
+                ++tally[T_DUP];
+                break;
+            case LOADID_JR3_E_UNKNOWN_ID:
+                ++bad_by_code[0];
+                ++tally[T_BAD];
+                break;
+            case LOADID_JR3_E_DLC:
+                ++bad_by_code[1];
+                ++tally[T_BAD];
+                break;
+            case LOADID_JR3_E_MALFORMED:
+                ++bad_by_code[2];
+                ++tally[T_BAD];
+                break;
+            case LOADID_JR3_E_RESERVED:
+                ++bad_by_code[3];
+                ++tally[T_BAD];
+                break;
+            case LOADID_JR3_NONE:
+                ++tally[T_NONE];
+                break;
+            default:
+                fail_msg("unexpected return %d at frame %d", rc, i);
         }
         if (i % 97 == 0 || i == n - 1) {
             loadid_jr3_stats_t st = stats_of(dec);
@@ -872,16 +869,15 @@ static void test_fuzz(void **state)
         }
     }
     loadid_jr3_stats_t st = stats_of(dec);
-    print_message("fuzz: %lld frames: ok %lld rejected %lld incomplete %lld bad %lld "
-                  "(id %lld dlc %lld malformed %lld reserved %lld) dup %lld discarded %lld "
-                  "fs changes %lld gaps %lld\n",
-                  (long long)st.frames_total, (long long)st.samples_ok,
-                  (long long)st.samples_rejected, (long long)st.samples_incomplete,
-                  (long long)st.frames_bad, (long long)st.frames_unknown_id,
-                  (long long)st.frames_bad_dlc, (long long)st.frames_malformed,
-                  (long long)st.frames_reserved, (long long)st.frames_duplicate,
-                  (long long)st.frames_discarded, (long long)st.full_scale_changes,
-                  (long long)st.sequence_gaps);
+    print_message(
+        "fuzz: %lld frames: ok %lld rejected %lld incomplete %lld bad %lld "
+        "(id %lld dlc %lld malformed %lld reserved %lld) dup %lld discarded %lld "
+        "fs changes %lld gaps %lld\n",
+        (long long)st.frames_total, (long long)st.samples_ok, (long long)st.samples_rejected,
+        (long long)st.samples_incomplete, (long long)st.frames_bad, (long long)st.frames_unknown_id,
+        (long long)st.frames_bad_dlc, (long long)st.frames_malformed, (long long)st.frames_reserved,
+        (long long)st.frames_duplicate, (long long)st.frames_discarded,
+        (long long)st.full_scale_changes, (long long)st.sequence_gaps);
     /* Every path was taken. */
     for (int t = T_SAMPLE; t <= T_NONE; ++t) {
         assert_true(tally[t] > 0);
@@ -893,8 +889,7 @@ static void test_fuzz(void **state)
     loadid_jr3_decoder_destroy(dec);
 }
 
-static void test_config_and_arguments(void **state)
-{
+static void test_config_and_arguments(void **state) {
     (void)state;
     loadid_jr3_config_t cfg;
     loadid_jr3_config_default(&cfg);
@@ -957,10 +952,19 @@ static void test_config_and_arguments(void **state)
     loadid_jr3_decoder_destroy(dec);
 
     /* Every code has its own text. */
-    const int codes[] = {LOADID_JR3_NONE, LOADID_JR3_SAMPLE, LOADID_JR3_FULL_SCALE,
-                         LOADID_JR3_E_SATURATED, LOADID_JR3_E_FAULT, LOADID_JR3_E_UNKNOWN_ID,
-                         LOADID_JR3_E_DLC, LOADID_JR3_E_MALFORMED, LOADID_JR3_E_RESERVED,
-                         LOADID_JR3_E_DUPLICATE, LOADID_JR3_E_RANGE, -EINVAL, -ENOMEM};
+    const int codes[] = {LOADID_JR3_NONE,
+                         LOADID_JR3_SAMPLE,
+                         LOADID_JR3_FULL_SCALE,
+                         LOADID_JR3_E_SATURATED,
+                         LOADID_JR3_E_FAULT,
+                         LOADID_JR3_E_UNKNOWN_ID,
+                         LOADID_JR3_E_DLC,
+                         LOADID_JR3_E_MALFORMED,
+                         LOADID_JR3_E_RESERVED,
+                         LOADID_JR3_E_DUPLICATE,
+                         LOADID_JR3_E_RANGE,
+                         -EINVAL,
+                         -ENOMEM};
     const size_t nc = sizeof codes / sizeof codes[0];
     for (size_t i = 0; i < nc; ++i) {
         const char *a = loadid_jr3_strerror(codes[i]);
@@ -977,8 +981,7 @@ static void test_config_and_arguments(void **state)
     assert_string_equal(loadid_jr3_group_name(-1), "?");
 }
 
-int main(void)
-{
+int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_decode_hand_frames),
         cmocka_unit_test(test_encode_hand_frames),

@@ -127,7 +127,8 @@ static void planar_arm_matches_closed_form(void **state) {
         double c1 = cos(q1), s1 = sin(q1), c12 = cos(th), s12 = sin(th);
         double pos[3] = {L1 * c1 + L2 * c12, L1 * s1 + L2 * s12, 0};
         double acc_base[3] = {-L1 * (s1 * a1 + c1 * v1 * v1) - L2 * (s12 * thdd + c12 * thd * thd),
-                              L1 * (c1 * a1 - s1 * v1 * v1) + L2 * (c12 * thdd - s12 * thd * thd), 0};
+                              L1 * (c1 * a1 - s1 * v1 * v1) + L2 * (c12 * thdd - s12 * thd * thd),
+                              0};
         double rz[9], rx[9], r[9];
         rot_z(th, rz);
         rot_x(HALF_PI, rx);
@@ -188,25 +189,35 @@ static void chain_check_refuses_broken_chains(void **state) {
     assert_int_equal(loadid_chain_check(&good), 0);
     assert_int_equal(loadid_chain_check(NULL), -EINVAL);
 
-    c = good; c.num_joints = 0;
+    c = good;
+    c.num_joints = 0;
     assert_int_equal(loadid_chain_check(&c), -EINVAL);
-    c = good; c.num_joints = LOADID_MAX_JOINTS + 1;
+    c = good;
+    c.num_joints = LOADID_MAX_JOINTS + 1;
     assert_int_equal(loadid_chain_check(&c), -EINVAL);
-    c = good; c.joints[1].axis[2] = 0.9; /* not a unit axis */
+    c = good;
+    c.joints[1].axis[2] = 0.9; /* not a unit axis */
     assert_int_equal(loadid_chain_check(&c), -EINVAL);
-    c = good; c.joints[0].type = (loadid_joint_type_t)7;
+    c = good;
+    c.joints[0].type = (loadid_joint_type_t)7;
     assert_int_equal(loadid_chain_check(&c), -EINVAL);
-    c = good; c.joints[0].origin_rot[8] = -1; /* a reflection, det -1 */
+    c = good;
+    c.joints[0].origin_rot[8] = -1; /* a reflection, det -1 */
     assert_int_equal(loadid_chain_check(&c), -EINVAL);
-    c = good; c.joints[1].origin_rot[1] = 1e-6; /* not orthonormal */
+    c = good;
+    c.joints[1].origin_rot[1] = 1e-6; /* not orthonormal */
     assert_int_equal(loadid_chain_check(&c), -EINVAL);
-    c = good; c.tip_xyz[0] = INFINITY;
+    c = good;
+    c.tip_xyz[0] = INFINITY;
     assert_int_equal(loadid_chain_check(&c), -EINVAL);
-    c = good; c.joints[0].lower = 1, c.joints[0].upper = 0;
+    c = good;
+    c.joints[0].lower = 1, c.joints[0].upper = 0;
     assert_int_equal(loadid_chain_check(&c), -EINVAL);
-    c = good; c.joints[0].velocity = 0;
+    c = good;
+    c.joints[0].velocity = 0;
     assert_int_equal(loadid_chain_check(&c), -EINVAL);
-    c = good; memset(c.joints[0].name, 'x', sizeof c.joints[0].name); /* no NUL */
+    c = good;
+    memset(c.joints[0].name, 'x', sizeof c.joints[0].name); /* no NUL */
     assert_int_equal(loadid_chain_check(&c), -EINVAL);
     loadid_kin_t *kin = NULL;
     assert_int_equal(loadid_kin_create(&c, kGravity, &kin), -EINVAL);
@@ -260,7 +271,8 @@ static void pose_at(const loadid_kin_t *kin, const poly_traj_t *p, double t, dou
     for (int i = 0; i < 9; ++i) r[i] = st.rotation[i];
     for (int i = 0; i < 3; ++i) {
         pos[i] = st.position[i];
-        w_base[i] = r[3 * i] * st.omega[0] + r[3 * i + 1] * st.omega[1] + r[3 * i + 2] * st.omega[2];
+        w_base[i] =
+            r[3 * i] * st.omega[0] + r[3 * i + 1] * st.omega[1] + r[3 * i + 2] * st.omega[2];
     }
 }
 

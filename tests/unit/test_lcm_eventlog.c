@@ -40,7 +40,8 @@ typedef struct {
 } log_t;
 
 static void put32(uint8_t *p, uint32_t v) {
-    p[0] = (uint8_t)(v >> 24), p[1] = (uint8_t)(v >> 16), p[2] = (uint8_t)(v >> 8), p[3] = (uint8_t)v;
+    p[0] = (uint8_t)(v >> 24), p[1] = (uint8_t)(v >> 16), p[2] = (uint8_t)(v >> 8),
+    p[3] = (uint8_t)v;
 }
 
 static void put64(uint8_t *p, uint64_t v) {
@@ -49,7 +50,9 @@ static void put64(uint8_t *p, uint64_t v) {
 }
 
 /* The data of event i: bytes a reader cannot mistake for another's. */
-static uint8_t data_byte(int i, int32_t k) { return (uint8_t)(i * 37 + k * 11 + 5); }
+static uint8_t data_byte(int i, int32_t k) {
+    return (uint8_t)(i * 37 + k * 11 + 5);
+}
 
 static void add(log_t *l, int64_t eventnum, int64_t t, const char *channel, int32_t data_len) {
     const int i = l->n++;
@@ -365,8 +368,8 @@ static void test_search_inside_an_event_leaves_it_whole(void **state) {
     add(&l, 2, 12, "NEXT", 8);
     uint8_t *d = l.bytes + l.off[0] + 28 + 4;
     put32(d + 10, LOADID_EVENTLOG_SYNC);
-    put32(d + 10 + 20, 4);  /* channel length */
-    put32(d + 10 + 24, 0);  /* data length */
+    put32(d + 10 + 20, 4); /* channel length */
+    put32(d + 10 + 24, 0); /* data length */
     memcpy(d + 10 + 28, "\x01\x02\x03\x04", 4);
     uint8_t want[60];
     memcpy(want, d, sizeof want);
@@ -448,8 +451,8 @@ static void test_size_bounds(void **state) {
     ch256[LOADID_EVENTLOG_CHANNEL_MAX] = 0;
     memset(&l, 0, sizeof l);
     add(&l, 0, 10, "A", 4);
-    add(&l, 1, 11, ch256, 64);   /* the longest channel, data_max bytes */
-    add(&l, 2, 12, "B", 65);     /* one byte over data_max */
+    add(&l, 1, 11, ch256, 64); /* the longest channel, data_max bytes */
+    add(&l, 2, 12, "B", 65);   /* one byte over data_max */
     add(&l, 3, 13, "C", 0);
     reader_t rd;
     open_bytes(&rd, l.bytes, l.len, 64);
@@ -467,7 +470,7 @@ static void test_size_bounds(void **state) {
     ch256[LOADID_EVENTLOG_CHANNEL_MAX + 1] = 0;
     memset(&l, 0, sizeof l);
     add(&l, 0, 10, "A", 4);
-    add(&l, 1, 11, ch256, 8);    /* 257 bytes of channel */
+    add(&l, 1, 11, ch256, 8); /* 257 bytes of channel */
     add(&l, 2, 12, "B", 4);
     open_bytes(&rd, l.bytes, l.len, 64);
     expect_event(&rd, &l, 0, 0);
@@ -523,7 +526,8 @@ static void test_any_one_byte_changed_costs_at_most_its_event(void **state) {
         memcpy(m, l.bytes, l.len);
         const size_t at = (size_t)(rng() % l.len);
         const uint8_t was = m[at];
-        do m[at] = (uint8_t)rng(); while (m[at] == was);
+        do m[at] = (uint8_t)rng();
+        while (m[at] == was);
         int hit = 0;
         while (!(l.off[hit] <= at && at < l.off[hit] + l.size[hit])) ++hit;
         reader_t rd;
@@ -549,7 +553,8 @@ static void test_any_one_byte_changed_costs_at_most_its_event(void **state) {
             assert_int_equal(ev.eventnum, l.eventnum[next]);
             assert_string_equal(ev.channel, l.channel[next]);
             assert_int_equal(ev.data_len, l.data_len[next]);
-            for (int32_t k = 0; k < ev.data_len; ++k) assert_int_equal(ev.data[k], data_byte(next, k));
+            for (int32_t k = 0; k < ev.data_len; ++k)
+                assert_int_equal(ev.data[k], data_byte(next, k));
             ++next;
         }
         assert_int_equal(rc, 0);

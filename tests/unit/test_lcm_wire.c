@@ -55,15 +55,21 @@ static double rnd_double(void) {
 static void rnd_doubles(double *v, int n) {
     for (int i = 0; i < n; ++i) v[i] = rnd_double();
 }
-static int64_t rnd_i64(void) { return (int64_t)rnd(); }
-static int8_t rnd_i8(void) { return (int8_t)rnd(); }
+static int64_t rnd_i64(void) {
+    return (int64_t)rnd();
+}
+static int8_t rnd_i8(void) {
+    return (int8_t)rnd();
+}
 /* 0..127 printable characters and bytes >= 0x80, never a NUL. */
 static void rnd_name(char *s) {
     const int n = (int)(rnd() % LOADID_LCM_NAME_MAX);
     for (int i = 0; i < n; ++i) s[i] = (char)(1 + rnd() % 255);
     s[n] = 0;
 }
-static int same_bits(const double *a, const double *b, int n) { return !memcmp(a, b, 8 * (size_t)n); }
+static int same_bits(const double *a, const double *b, int n) {
+    return !memcmp(a, b, 8 * (size_t)n);
+}
 
 /* Decodes from an exact-size heap copy (the sanitizers see over-reads). */
 typedef int (*decode_fn)(const uint8_t *, size_t, void *);
@@ -77,12 +83,12 @@ static int decode_copy(decode_fn f, const uint8_t *bytes, size_t n, void *out) {
     return rc;
 }
 /* Type-erased wrappers (a call through a cast function pointer is not C). */
-#define WRAP(type)                                                                             \
-    static int dec_##type(const uint8_t *b, size_t n, void *out) {                            \
-        return loadid_lcm_decode_##type(b, n, out);                                            \
-    }                                                                                          \
-    static int enc_##type(const void *m, uint8_t *b, size_t cap) {                            \
-        return loadid_lcm_encode_##type(m, b, cap);                                            \
+#define WRAP(type)                                                 \
+    static int dec_##type(const uint8_t *b, size_t n, void *out) { \
+        return loadid_lcm_decode_##type(b, n, out);                \
+    }                                                              \
+    static int enc_##type(const void *m, uint8_t *b, size_t cap) { \
+        return loadid_lcm_encode_##type(m, b, cap);                \
     }
 WRAP(joint_state)
 WRAP(command)
@@ -95,11 +101,14 @@ static void test_fingerprints(void **state) {
     (void)state;
     assert_true(loadid_lcm_fingerprint(LOADID_LCM_JOINT_STATE) ==
                 (uint64_t)__loadid_joint_state_t_get_hash());
-    assert_true(loadid_lcm_fingerprint(LOADID_LCM_COMMAND) == (uint64_t)__loadid_command_t_get_hash());
+    assert_true(loadid_lcm_fingerprint(LOADID_LCM_COMMAND) ==
+                (uint64_t)__loadid_command_t_get_hash());
     assert_true(loadid_lcm_fingerprint(LOADID_LCM_ESTIMATE) ==
                 (uint64_t)__loadid_estimate_t_get_hash());
-    assert_true(loadid_lcm_fingerprint(LOADID_LCM_WRENCH) == (uint64_t)__loadid_wrench_t_get_hash());
-    assert_true(loadid_lcm_fingerprint(LOADID_LCM_STATUS) == (uint64_t)__loadid_status_t_get_hash());
+    assert_true(loadid_lcm_fingerprint(LOADID_LCM_WRENCH) ==
+                (uint64_t)__loadid_wrench_t_get_hash());
+    assert_true(loadid_lcm_fingerprint(LOADID_LCM_STATUS) ==
+                (uint64_t)__loadid_status_t_get_hash());
     assert_true(loadid_lcm_fingerprint(LOADID_LCM_LOAD_MODEL) ==
                 (uint64_t)__loadid_load_model_t_get_hash());
     assert_true(loadid_lcm_fingerprint((loadid_lcm_type_t)6) == 0);
@@ -161,8 +170,8 @@ static void test_joint_state(void **state) {
         assert_memory_equal(ours, gen, (size_t)n);
         loadid_lcm_joint_state_t d;
         const int rc = decode_copy(dec_joint_state, gen, (size_t)gn, &d);
-        const int nonfinite = any_nonfinite(m.position, m.num_joints) ||
-                              any_nonfinite(m.setpoint, m.num_joints);
+        const int nonfinite =
+            any_nonfinite(m.position, m.num_joints) || any_nonfinite(m.setpoint, m.num_joints);
         assert_int_equal(rc, nonfinite ? LOADID_LCM_NONFINITE : 0);
         assert_true(d.utime == m.utime && d.num_joints == m.num_joints);
         assert_true(same_bits(d.position, m.position, m.num_joints));
@@ -198,18 +207,14 @@ static void test_joint_state_counts(void **state) {
         const uint32_t u = (uint32_t)bad[i];
         b[16] = (uint8_t)(u >> 24), b[17] = (uint8_t)(u >> 16), b[18] = (uint8_t)(u >> 8),
         b[19] = (uint8_t)u;
-        assert_int_equal(decode_copy(dec_joint_state, b, (size_t)n, &d),
-                         LOADID_LCM_ECOUNT);
+        assert_int_equal(decode_copy(dec_joint_state, b, (size_t)n, &d), LOADID_LCM_ECOUNT);
         /* a long enough buffer does not make such a count acceptable */
-        assert_int_equal(decode_copy(dec_joint_state, b, sizeof b, &d),
-                         LOADID_LCM_ECOUNT);
+        assert_int_equal(decode_copy(dec_joint_state, b, sizeof b, &d), LOADID_LCM_ECOUNT);
     }
     buf[19] = 3; /* fewer joints than the bytes hold */
-    assert_int_equal(decode_copy(dec_joint_state, buf, (size_t)n, &d),
-                     LOADID_LCM_ELONG);
+    assert_int_equal(decode_copy(dec_joint_state, buf, (size_t)n, &d), LOADID_LCM_ELONG);
     buf[19] = 5; /* more */
-    assert_int_equal(decode_copy(dec_joint_state, buf, (size_t)n, &d),
-                     LOADID_LCM_ESHORT);
+    assert_int_equal(decode_copy(dec_joint_state, buf, (size_t)n, &d), LOADID_LCM_ESHORT);
     m.num_joints = 0;
     assert_int_equal(loadid_lcm_encode_joint_state(&m, buf, sizeof buf), LOADID_LCM_EINVAL);
     m.num_joints = LOADID_LCM_MAX_JOINTS + 1;
@@ -276,9 +281,8 @@ static void test_command_strings(void **state) {
     /* negative length */
     assert_int_equal(decode_copy(dec_command, b, command_bytes(b, -1, s, 1), &d),
                      LOADID_LCM_ESTRING);
-    assert_int_equal(
-        decode_copy(dec_command, b, command_bytes(b, INT32_MIN, s, 1), &d),
-        LOADID_LCM_ESTRING);
+    assert_int_equal(decode_copy(dec_command, b, command_bytes(b, INT32_MIN, s, 1), &d),
+                     LOADID_LCM_ESTRING);
     /* unterminated: the last byte is not a NUL */
     s[0] = 'x';
     assert_int_equal(decode_copy(dec_command, b, command_bytes(b, 3, s, 3), &d),
@@ -289,27 +293,22 @@ static void test_command_strings(void **state) {
                      LOADID_LCM_ESTRING);
     /* a length beyond the buffer */
     s[3] = 'z', s[4] = 0;
-    assert_int_equal(decode_copy(dec_command, b, command_bytes(b, 6, s, 5), &d),
+    assert_int_equal(decode_copy(dec_command, b, command_bytes(b, 6, s, 5), &d), LOADID_LCM_ESHORT);
+    assert_int_equal(decode_copy(dec_command, b, command_bytes(b, INT32_MAX, s, 5), &d),
                      LOADID_LCM_ESHORT);
-    assert_int_equal(
-        decode_copy(dec_command, b, command_bytes(b, INT32_MAX, s, 5), &d),
-        LOADID_LCM_ESHORT);
     /* the longest name that fits: 127 characters; 128 is refused */
     memset(s, 'n', sizeof s);
     s[127] = 0;
-    assert_int_equal(
-        decode_copy(dec_command, b, command_bytes(b, 128, s, 128), &d), 0);
+    assert_int_equal(decode_copy(dec_command, b, command_bytes(b, 128, s, 128), &d), 0);
     assert_int_equal((int)strlen(d.load_name), 127);
     s[127] = 'n', s[128] = 0;
-    assert_int_equal(
-        decode_copy(dec_command, b, command_bytes(b, 129, s, 129), &d),
-        LOADID_LCM_ESTRING);
+    assert_int_equal(decode_copy(dec_command, b, command_bytes(b, 129, s, 129), &d),
+                     LOADID_LCM_ESTRING);
     /* lcm-gen's encoder writes such a name; ours refuses to */
     loadid_command_t g = {1, 2, (char *)s};
     const int gn = loadid_command_t_encode(b, 0, sizeof b, &g);
     assert_int_equal(gn, 8 + 8 + 1 + 4 + 129);
-    assert_int_equal(decode_copy(dec_command, b, (size_t)gn, &d),
-                     LOADID_LCM_ESTRING);
+    assert_int_equal(decode_copy(dec_command, b, (size_t)gn, &d), LOADID_LCM_ESTRING);
     loadid_lcm_command_t m;
     memset(m.load_name, 'n', sizeof m.load_name); /* no NUL within the array */
     m.utime = 0, m.action = 1;
@@ -335,7 +334,8 @@ static void test_estimate(void **state) {
         g.load_name = m.load_name;
         memcpy(g.phi, m.phi, sizeof g.phi), memcpy(g.offset, m.offset, sizeof g.offset);
         g.mass = m.mass;
-        memcpy(g.com, m.com, sizeof g.com), memcpy(g.inertia_com, m.inertia_com, sizeof g.inertia_com);
+        memcpy(g.com, m.com, sizeof g.com),
+            memcpy(g.inertia_com, m.inertia_com, sizeof g.inertia_com);
         g.condition_number = m.condition_number, g.sigma_min = m.sigma_min;
         g.physically_consistent = m.physically_consistent;
         uint8_t ours[LOADID_LCM_ESTIMATE_MAX], gen[1024];
@@ -384,8 +384,8 @@ static void test_wrench(void **state) {
         assert_memory_equal(ours, gen, (size_t)n);
         loadid_lcm_wrench_t d;
         const int rc = decode_copy(dec_wrench, gen, (size_t)gn, &d);
-        assert_int_equal(rc, any_nonfinite(m.force, 3) || any_nonfinite(m.torque, 3)
-                                 ? LOADID_LCM_NONFINITE : 0);
+        assert_int_equal(
+            rc, any_nonfinite(m.force, 3) || any_nonfinite(m.torque, 3) ? LOADID_LCM_NONFINITE : 0);
         assert_true(d.utime == m.utime && same_bits(d.force, m.force, 3) &&
                     same_bits(d.torque, m.torque, 3));
         loadid_wrench_t gd;
@@ -406,10 +406,19 @@ static void test_status(void **state) {
         m.utime = rnd_i64(), m.state = rnd_i8();
         m.samples_ok = rnd_i64(), m.frames_bad = rnd_i64(), m.samples_incomplete = rnd_i64();
         m.samples_saturated = rnd_i64(), m.sequence_gaps = rnd_i64(), m.joint_msgs_bad = rnd_i64();
-        rnd_doubles(&m.loop_us_p50, 1), rnd_doubles(&m.loop_us_p99, 1), rnd_doubles(&m.loop_us_max, 1);
-        loadid_status_t g = {m.utime, m.state, m.samples_ok, m.frames_bad, m.samples_incomplete,
-                             m.samples_saturated, m.sequence_gaps, m.joint_msgs_bad,
-                             m.loop_us_p50, m.loop_us_p99, m.loop_us_max};
+        rnd_doubles(&m.loop_us_p50, 1), rnd_doubles(&m.loop_us_p99, 1),
+            rnd_doubles(&m.loop_us_max, 1);
+        loadid_status_t g = {m.utime,
+                             m.state,
+                             m.samples_ok,
+                             m.frames_bad,
+                             m.samples_incomplete,
+                             m.samples_saturated,
+                             m.sequence_gaps,
+                             m.joint_msgs_bad,
+                             m.loop_us_p50,
+                             m.loop_us_p99,
+                             m.loop_us_max};
         uint8_t ours[LOADID_LCM_STATUS_SIZE], gen[256];
         const int n = loadid_lcm_encode_status(&m, ours, sizeof ours);
         const int gn = loadid_status_t_encode(gen, 0, sizeof gen, &g);
@@ -445,7 +454,8 @@ static loadid_load_model_t gen_load_model(loadid_lcm_load_model_t *m) {
     g.identified = m->identified, g.projected = m->projected;
     memcpy(g.phi, m->phi, sizeof g.phi), memcpy(g.phi_std, m->phi_std, sizeof g.phi_std);
     g.mass = m->mass;
-    memcpy(g.com, m->com, sizeof g.com), memcpy(g.inertia_com, m->inertia_com, sizeof g.inertia_com);
+    memcpy(g.com, m->com, sizeof g.com),
+        memcpy(g.inertia_com, m->inertia_com, sizeof g.inertia_com);
     return g;
 }
 
@@ -483,8 +493,8 @@ static void test_load_model(void **state) {
         assert_true(same_bits(d.inertia_com, m.inertia_com, 6));
         loadid_load_model_t gd;
         assert_int_equal(loadid_load_model_t_decode(ours, 0, n, &gd), n);
-        assert_true(gd.utime == m.utime && gd.method == m.method &&
-                    gd.identified == m.identified && gd.projected == m.projected);
+        assert_true(gd.utime == m.utime && gd.method == m.method && gd.identified == m.identified &&
+                    gd.projected == m.projected);
         assert_string_equal(gd.load_name, m.load_name);
         assert_true(same_bits(gd.phi, m.phi, 10) && same_bits(gd.phi_std, m.phi_std, 10));
         assert_true(same_bits(&gd.mass, &m.mass, 1) && same_bits(gd.com, m.com, 3));
@@ -600,7 +610,8 @@ static void test_udpm_url(void **state) {
     assert_int_equal(loadid_lcm_udpm_parse_url(NULL, &u), 0);
     assert_int_equal(loadid_lcm_udpm_parse_url("udpm://224.1.2.3", &u), 0);
     assert_int_equal(u.port, 7667);
-    assert_int_equal(loadid_lcm_udpm_parse_url("udpm://224.1.2.3:1234?ttl=1&recv_buf_size=200000", &u), 0);
+    assert_int_equal(
+        loadid_lcm_udpm_parse_url("udpm://224.1.2.3:1234?ttl=1&recv_buf_size=200000", &u), 0);
     assert_int_equal(u.port, 1234);
     assert_int_equal(u.recv_buf_size, 200000);
     assert_int_equal(loadid_lcm_udpm_parse_url("memq://", &u), -EPROTONOSUPPORT);
@@ -610,7 +621,8 @@ static void test_udpm_url(void **state) {
     assert_int_equal(loadid_lcm_udpm_parse_url("udpm://239.255.76.67:70000", &u), -EINVAL);
     assert_int_equal(loadid_lcm_udpm_parse_url("udpm://239.255.76.67:76x", &u), -EINVAL);
     assert_int_equal(loadid_lcm_udpm_parse_url("udpm://:7667", &u), -EINVAL);
-    assert_int_equal(loadid_lcm_udpm_parse_url("udpm://239.255.76.67?recv_buf_size=x", &u), -EINVAL);
+    assert_int_equal(loadid_lcm_udpm_parse_url("udpm://239.255.76.67?recv_buf_size=x", &u),
+                     -EINVAL);
     assert_int_equal(loadid_lcm_udpm_parse_url("239.255.76.67", &u), -EINVAL);
 }
 
@@ -648,12 +660,18 @@ static void test_udpm_datagrams(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_fingerprints),      cmocka_unit_test(test_joint_state),
-        cmocka_unit_test(test_joint_state_counts), cmocka_unit_test(test_command),
-        cmocka_unit_test(test_command_strings),   cmocka_unit_test(test_estimate),
-        cmocka_unit_test(test_wrench),            cmocka_unit_test(test_status),
-        cmocka_unit_test(test_load_model),        cmocka_unit_test(test_load_model_strings),
-        cmocka_unit_test(test_types_not_confused), cmocka_unit_test(test_udpm_url),
+        cmocka_unit_test(test_fingerprints),
+        cmocka_unit_test(test_joint_state),
+        cmocka_unit_test(test_joint_state_counts),
+        cmocka_unit_test(test_command),
+        cmocka_unit_test(test_command_strings),
+        cmocka_unit_test(test_estimate),
+        cmocka_unit_test(test_wrench),
+        cmocka_unit_test(test_status),
+        cmocka_unit_test(test_load_model),
+        cmocka_unit_test(test_load_model_strings),
+        cmocka_unit_test(test_types_not_confused),
+        cmocka_unit_test(test_udpm_url),
         cmocka_unit_test(test_udpm_datagrams),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

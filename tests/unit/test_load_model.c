@@ -20,9 +20,10 @@
 #include "random_util.h"
 
 /* phi of a solid box (sides a, b, c [m], mass m) whose centre is at com. */
-static void box_phi(double m, double a, double b, double c, const double com[3], loadid_real_t phi[10]) {
-    const loadid_real_t Ic[6] = {m * (b * b + c * c) / 12, 0, 0, m * (a * a + c * c) / 12, 0,
-                                 m * (a * a + b * b) / 12};
+static void box_phi(double m, double a, double b, double c, const double com[3],
+                    loadid_real_t phi[10]) {
+    const loadid_real_t Ic[6] = {m * (b * b + c * c) / 12, 0, 0,
+                                 m * (a * a + c * c) / 12, 0, m * (a * a + b * b) / 12};
     const loadid_real_t cc[3] = {com[0], com[1], com[2]};
     assert_int_equal(loadid_phi_from_physical(m, cc, Ic, phi), 0);
 }
@@ -33,8 +34,8 @@ static void second_moment(const loadid_real_t phi[10], double S[9]) {
     assert_int_equal(loadid_phi_to_physical(phi, &p), 0);
     const double *v = NULL;
     double I[9];
-    const double in[6] = {p.inertia_com[0], p.inertia_com[1], p.inertia_com[2], p.inertia_com[3],
-                          p.inertia_com[4], p.inertia_com[5]};
+    const double in[6] = {p.inertia_com[0], p.inertia_com[1], p.inertia_com[2],
+                          p.inertia_com[3], p.inertia_com[4], p.inertia_com[5]};
     v = in;
     I[0] = v[0], I[1] = v[1], I[2] = v[2], I[3] = v[1], I[4] = v[3], I[5] = v[4], I[6] = v[2],
     I[7] = v[4], I[8] = v[5];
@@ -81,7 +82,8 @@ static void test_consistent_load_passes_unchanged(void **state) {
     assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, LOADID_IDENT_MASS | LOADID_IDENT_COM | LOADID_IDENT_INERTIA);
     assert_int_equal(m.projected, 0);
-    for (int i = 0; i < 10; ++i) assert_true(fabs(m.phi[i] - phi[i]) <= 1e-15 + 1e-12 * fabs(phi[i]));
+    for (int i = 0; i < 10; ++i)
+        assert_true(fabs(m.phi[i] - phi[i]) <= 1e-15 + 1e-12 * fabs(phi[i]));
     assert_int_equal(m.physical.violations, 0);
 }
 

@@ -49,26 +49,27 @@ static int g_skipped;
 static const double kFsForce[3] = {200.0, 100.0, 50.0};
 static const double kFsMoment[3] = {12.0, 6.0, 3.0};
 
-static double expect_si(int counts, double fs) { return counts * fs / 16384.0; }
+static double expect_si(int counts, double fs) {
+    return counts * fs / 16384.0;
+}
 
-static uint16_t reg_of(int v) { return (uint16_t)(v < 0 ? v + 65536 : v); }
+static uint16_t reg_of(int v) {
+    return (uint16_t)(v < 0 ? v + 65536 : v);
+}
 
-static void block(uint16_t r[8], const int c[6], unsigned status, unsigned counter)
-{
+static void block(uint16_t r[8], const int c[6], unsigned status, unsigned counter) {
     for (int i = 0; i < 6; ++i) r[i] = reg_of(c[i]);
     r[6] = (uint16_t)status;
     r[7] = (uint16_t)counter;
 }
 
-static int64_t realtime_us(void)
-{
+static int64_t realtime_us(void) {
     struct timespec ts;
     clock_gettime(CLOCK_REALTIME, &ts);
     return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
 }
 
-static int64_t mono_ms(void)
-{
+static int64_t mono_ms(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
@@ -76,8 +77,7 @@ static int64_t mono_ms(void)
 
 /* ======================================================= pure decoder == */
 
-static void decoder_si_values(void **state)
-{
+static void decoder_si_values(void **state) {
     (void)state;
     loadid_modbus_ft_decoder_t d;
     assert_int_equal(loadid_modbus_ft_decoder_init(&d, kFsForce, kFsMoment), 0);
@@ -105,8 +105,7 @@ static void decoder_si_values(void **state)
     assert_int_equal(loadid_modbus_ft_decoder_init(&d, kFsForce, nan3), -EINVAL);
 }
 
-static void decoder_status_bits(void **state)
-{
+static void decoder_status_bits(void **state) {
     (void)state;
     loadid_modbus_ft_decoder_t d;
     loadid_modbus_ft_decoder_init(&d, kFsForce, kFsMoment);
@@ -141,8 +140,7 @@ static void decoder_status_bits(void **state)
     assert_int_equal(st->blocks, 4 + malformed);
 }
 
-static void decoder_stale_and_gaps(void **state)
-{
+static void decoder_stale_and_gaps(void **state) {
     (void)state;
     loadid_modbus_ft_decoder_t d;
     loadid_modbus_ft_decoder_init(&d, kFsForce, kFsMoment);
@@ -181,8 +179,7 @@ static void decoder_stale_and_gaps(void **state)
     assert_int_equal(d.st.counter_gaps, gaps);
 }
 
-static void decoder_full_scale_registers(void **state)
-{
+static void decoder_full_scale_registers(void **state) {
     (void)state;
     loadid_modbus_ft_decoder_t d;
     loadid_modbus_ft_decoder_init(&d, kFsForce, kFsMoment);
@@ -193,10 +190,10 @@ static void decoder_full_scale_registers(void **state)
     loadid_modbus_ft_sample_t s;
     block(r, c, 0, 1);
     assert_int_equal(loadid_modbus_ft_decode(&d, r, 0, &s), LOADID_MODBUS_FT_SAMPLE);
-    assert_true(s.force[0] == 150.0);                 /* 1500 x 0.1 N */
+    assert_true(s.force[0] == 150.0); /* 1500 x 0.1 N */
     assert_true(s.force[1] == expect_si(8192, 200.0));
     assert_true(s.force[2] == expect_si(-4096, 250.5));
-    assert_true(s.torque[0] == 8.0);                  /* 800 x 0.01 N m */
+    assert_true(s.torque[0] == 8.0); /* 800 x 0.01 N m */
     assert_true(s.torque[1] == expect_si(1000, 9.0));
     assert_true(s.torque[2] == expect_si(-1, 12.34));
     /* a zero register: malformed, full scales unchanged */
@@ -207,8 +204,7 @@ static void decoder_full_scale_registers(void **state)
     assert_int_equal(d.st.full_scale_malformed, 1);
 }
 
-static void encoder_round_trip_and_saturation(void **state)
-{
+static void encoder_round_trip_and_saturation(void **state) {
     (void)state;
     uint16_t r[8];
     const double f[3] = {300.0, -50.0, 1000.0}, t[3] = {1.5, -30.0, 0.0};
@@ -249,8 +245,7 @@ static void encoder_round_trip_and_saturation(void **state)
 }
 
 /* splitmix64 garbage: never a crash, the counters' invariants hold. */
-static void decoder_random_blocks(void **state)
-{
+static void decoder_random_blocks(void **state) {
     (void)state;
     uint64_t x = 12345;
     loadid_modbus_ft_decoder_t d;
@@ -264,15 +259,20 @@ static void decoder_random_blocks(void **state)
             z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
             r[k] = (uint16_t)(z ^ (z >> 31));
         }
-        if (i % 3) r[6] &= 3;              /* mostly valid status words */
+        if (i % 3) r[6] &= 3;                  /* mostly valid status words */
         if (i % 5 == 0) r[7] = d.last_counter; /* some stale */
         loadid_modbus_ft_sample_t s;
         const int rc = loadid_modbus_ft_decode(&d, r, i, &s);
-        if (rc == LOADID_MODBUS_FT_SAMPLE) ++tally[0];
-        else if (rc == LOADID_MODBUS_FT_E_SATURATED || rc == LOADID_MODBUS_FT_E_FAULT) ++tally[1];
-        else if (rc == LOADID_MODBUS_FT_E_STALE) ++tally[2];
-        else if (rc == LOADID_MODBUS_FT_E_MALFORMED) ++tally[3];
-        else fail_msg("unexpected code %d", rc);
+        if (rc == LOADID_MODBUS_FT_SAMPLE)
+            ++tally[0];
+        else if (rc == LOADID_MODBUS_FT_E_SATURATED || rc == LOADID_MODBUS_FT_E_FAULT)
+            ++tally[1];
+        else if (rc == LOADID_MODBUS_FT_E_STALE)
+            ++tally[2];
+        else if (rc == LOADID_MODBUS_FT_E_MALFORMED)
+            ++tally[3];
+        else
+            fail_msg("unexpected code %d", rc);
         if (rc == LOADID_MODBUS_FT_SAMPLE) {
             for (int k = 0; k < 3; ++k) assert_true(fabs(s.force[k]) <= 2 * kFsForce[k]);
         }
@@ -295,7 +295,7 @@ static char g_dir[128];
 static char g_link[200];
 
 typedef struct {
-    int master, slave;        /* slave kept open: the pty keeps its raw termios */
+    int master, slave; /* slave kept open: the pty keeps its raw termios */
     char pts[64];
     loadid_modbus_ft_server_t *srv;
     pthread_t th;
@@ -309,10 +309,11 @@ typedef struct {
 } sensor_t;
 
 /* counts of measurement n, channel k (inside int16) */
-static int counts_of(unsigned n, int k) { return (int)((n * 37u + (unsigned)k * 4099u) % 60000u) - 30000; }
+static int counts_of(unsigned n, int k) {
+    return (int)((n * 37u + (unsigned)k * 4099u) % 60000u) - 30000;
+}
 
-static void counting_hook(void *ctx, loadid_modbus_ft_server_t *srv)
-{
+static void counting_hook(void *ctx, loadid_modbus_ft_server_t *srv) {
     sensor_t *s = ctx;
     ++s->counter;
     ++s->hook_calls;
@@ -326,8 +327,7 @@ static void counting_hook(void *ctx, loadid_modbus_ft_server_t *srv)
 /* Sensors whose thread runs, stopped by the teardown after a failure. */
 static sensor_t *g_live[4];
 
-static void *serve(void *arg)
-{
+static void *serve(void *arg) {
     sensor_t *s = arg;
     while (!atomic_load(&s->stop)) {
         if (loadid_modbus_ft_server_poll(s->srv, 20) < 0) usleep(2000);
@@ -335,8 +335,7 @@ static void *serve(void *arg)
     return NULL;
 }
 
-static void sensor_start(sensor_t *s, int nb_input, int nb_holding, bool counting)
-{
+static void sensor_start(sensor_t *s, int nb_input, int nb_holding, bool counting) {
     memset(s, 0, sizeof *s);
     struct termios tio;
     memset(&tio, 0, sizeof tio);
@@ -344,7 +343,8 @@ static void sensor_start(sensor_t *s, int nb_input, int nb_holding, bool countin
     assert_int_equal(openpty(&s->master, &s->slave, s->pts, &tio, NULL), 0);
     unlink(g_link);
     assert_int_equal(symlink(s->pts, g_link), 0);
-    assert_int_equal(loadid_modbus_ft_server_create(s->master, 1, nb_input, nb_holding, &s->srv), 0);
+    assert_int_equal(loadid_modbus_ft_server_create(s->master, 1, nb_input, nb_holding, &s->srv),
+                     0);
     s->counting = counting;
     if (counting) loadid_modbus_ft_server_set_hook(s->srv, counting_hook, s);
     atomic_init(&s->stop, false);
@@ -359,8 +359,7 @@ static void sensor_start(sensor_t *s, int nb_input, int nb_holding, bool countin
 }
 
 /* Stops the sensor and closes the pty: its /dev/pts node goes away. */
-static void sensor_stop(sensor_t *s)
-{
+static void sensor_stop(sensor_t *s) {
     if (!s->running) return;
     for (int i = 0; i < 4; ++i)
         if (g_live[i] == s) g_live[i] = NULL;
@@ -373,15 +372,13 @@ static void sensor_stop(sensor_t *s)
     close(s->slave);
 }
 
-static void set_sample(sensor_t *s, const int c[6], unsigned status, unsigned counter)
-{
+static void set_sample(sensor_t *s, const int c[6], unsigned status, unsigned counter) {
     uint16_t r[8];
     block(r, c, status, counter);
     loadid_modbus_ft_server_set_input(s->srv, r);
 }
 
-static loadid_modbus_ft_config_t client_cfg(int timeout_ms)
-{
+static loadid_modbus_ft_config_t client_cfg(int timeout_ms) {
     loadid_modbus_ft_config_t c;
     loadid_modbus_ft_config_default(&c);
     snprintf(c.device, sizeof c.device, "%s", g_link);
@@ -395,22 +392,19 @@ static loadid_modbus_ft_config_t client_cfg(int timeout_ms)
  * holding kFsForce and kFsMoment in the register units (0.1 N, 0.01 N m). */
 static const uint16_t kFsRegisters[6] = {2000, 1000, 500, 1200, 600, 300};
 
-static void sensor_start_standard(sensor_t *s, bool counting)
-{
+static void sensor_start_standard(sensor_t *s, bool counting) {
     sensor_start(s, 8, 6, counting);
     loadid_modbus_ft_server_set_holding(s->srv, kFsRegisters);
 }
 
-static loadid_modbus_ft_t *client(int timeout_ms)
-{
+static loadid_modbus_ft_t *client(int timeout_ms) {
     loadid_modbus_ft_config_t c = client_cfg(timeout_ms);
     loadid_modbus_ft_t *ft = NULL;
     assert_int_equal(loadid_modbus_ft_create(&c, &ft), 0);
     return ft;
 }
 
-static void check_invariant(const loadid_modbus_ft_stats_t *st)
-{
+static void check_invariant(const loadid_modbus_ft_stats_t *st) {
     assert_int_equal(st->blocks, st->samples_ok + st->samples_rejected + st->samples_stale +
                                      st->samples_malformed);
     assert_int_equal(st->reads + st->full_scale_requests,
@@ -418,8 +412,7 @@ static void check_invariant(const loadid_modbus_ft_stats_t *st)
                          st->bad_frames + st->exceptions + st->io_errors);
 }
 
-static int setup_dir(void **state)
-{
+static int setup_dir(void **state) {
     (void)state;
     snprintf(g_dir, sizeof g_dir, "/tmp/loadid_test_modbus_XXXXXX"); /* mkdtemp template */
     if (!mkdtemp(g_dir)) return -1;
@@ -427,16 +420,14 @@ static int setup_dir(void **state)
     return 0;
 }
 
-static int stop_sensors(void **state)
-{
+static int stop_sensors(void **state) {
     (void)state;
     for (int i = 0; i < 4; ++i)
         if (g_live[i]) sensor_stop(g_live[i]);
     return 0;
 }
 
-static int teardown_dir(void **state)
-{
+static int teardown_dir(void **state) {
     (void)state;
     unlink(g_link);
     rmdir(g_dir);
@@ -445,8 +436,7 @@ static int teardown_dir(void **state)
 
 /* SI values over the wire, and the holding registers' full scales
  * overriding the configured ones. */
-static void pty_values_and_full_scale_override(void **state)
-{
+static void pty_values_and_full_scale_override(void **state) {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
     sensor_start(&s, 8, 6, false);
@@ -502,8 +492,7 @@ static void pty_values_and_full_scale_override(void **state)
 }
 
 /* Status bits and the counter, through the wire. */
-static void pty_status_stale_gaps(void **state)
-{
+static void pty_status_stale_gaps(void **state) {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
     sensor_start_standard(&s, false);
@@ -514,10 +503,14 @@ static void pty_status_stale_gaps(void **state)
         unsigned status, counter;
         int expect;
     } steps[] = {
-        {0, 1, LOADID_MODBUS_FT_SAMPLE},        {0, 1, LOADID_MODBUS_FT_E_STALE},
-        {0, 1, LOADID_MODBUS_FT_E_STALE},       {1, 2, LOADID_MODBUS_FT_E_SATURATED},
-        {2, 3, LOADID_MODBUS_FT_E_FAULT},       {4, 9, LOADID_MODBUS_FT_E_MALFORMED},
-        {0x8000, 9, LOADID_MODBUS_FT_E_MALFORMED}, {0, 8, LOADID_MODBUS_FT_SAMPLE}, /* 3->8: 4 gaps */
+        {0, 1, LOADID_MODBUS_FT_SAMPLE},
+        {0, 1, LOADID_MODBUS_FT_E_STALE},
+        {0, 1, LOADID_MODBUS_FT_E_STALE},
+        {1, 2, LOADID_MODBUS_FT_E_SATURATED},
+        {2, 3, LOADID_MODBUS_FT_E_FAULT},
+        {4, 9, LOADID_MODBUS_FT_E_MALFORMED},
+        {0x8000, 9, LOADID_MODBUS_FT_E_MALFORMED},
+        {0, 8, LOADID_MODBUS_FT_SAMPLE}, /* 3->8: 4 gaps */
         {0, 9, LOADID_MODBUS_FT_SAMPLE},
     };
     for (size_t i = 0; i < sizeof steps / sizeof steps[0]; ++i) {
@@ -540,8 +533,7 @@ static void pty_status_stale_gaps(void **state)
 }
 
 /* The sensor stops answering: a timeout, counted; it answers again: fine. */
-static void pty_timeout(void **state)
-{
+static void pty_timeout(void **state) {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
     sensor_start_standard(&s, true);
@@ -588,8 +580,7 @@ static void pty_timeout(void **state)
 }
 
 /* Frames with a wrong CRC written raw to the pty. */
-static void pty_crc_errors(void **state)
-{
+static void pty_crc_errors(void **state) {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
     sensor_start_standard(&s, true);
@@ -597,12 +588,14 @@ static void pty_crc_errors(void **state)
     assert_true(loadid_modbus_ft_open(ft) >= 0);
     loadid_modbus_ft_server_set_mode(s.srv, LOADID_MODBUS_FT_SERVER_BAD_CRC);
     loadid_modbus_ft_sample_t out;
-    for (int i = 0; i < 3; ++i) assert_int_equal(loadid_modbus_ft_read(ft, &out), LOADID_MODBUS_FT_E_BAD_FRAME);
+    for (int i = 0; i < 3; ++i)
+        assert_int_equal(loadid_modbus_ft_read(ft, &out), LOADID_MODBUS_FT_E_BAD_FRAME);
     loadid_modbus_ft_server_set_mode(s.srv, LOADID_MODBUS_FT_SERVER_NORMAL);
     assert_int_equal(loadid_modbus_ft_read(ft, &out), LOADID_MODBUS_FT_SAMPLE);
     /* the good answer is the 4th measurement */
     assert_int_equal(out.counter, 4);
-    for (int k = 0; k < 3; ++k) assert_true(out.force[k] == expect_si(counts_of(4, k), kFsForce[k]));
+    for (int k = 0; k < 3; ++k)
+        assert_true(out.force[k] == expect_si(counts_of(4, k), kFsForce[k]));
 
     /* raw garbage on the line before a request: flushed by the next
      * failure or ignored; never a crash, always counted */
@@ -613,7 +606,8 @@ static void pty_crc_errors(void **state)
     print_message("    after raw garbage: %s\n", loadid_modbus_ft_strerror(rc));
     assert_true(rc == LOADID_MODBUS_FT_E_BAD_FRAME || rc == LOADID_MODBUS_FT_E_TIMEOUT ||
                 rc == LOADID_MODBUS_FT_SAMPLE);
-    for (int i = 0; i < 3 && rc != LOADID_MODBUS_FT_SAMPLE; ++i) rc = loadid_modbus_ft_read(ft, &out);
+    for (int i = 0; i < 3 && rc != LOADID_MODBUS_FT_SAMPLE; ++i)
+        rc = loadid_modbus_ft_read(ft, &out);
     assert_int_equal(rc, LOADID_MODBUS_FT_SAMPLE);
     loadid_modbus_ft_stats_t st;
     loadid_modbus_ft_stats(ft, &st);
@@ -628,8 +622,7 @@ static void pty_crc_errors(void **state)
 }
 
 /* A sensor with fewer input registers than the map: exception responses. */
-static void pty_exception(void **state)
-{
+static void pty_exception(void **state) {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
     sensor_start(&s, 4, 6, false);
@@ -652,8 +645,7 @@ static void pty_exception(void **state)
 }
 
 /* The device vanishes (the pty is closed), then comes back. */
-static void pty_device_vanishes_and_returns(void **state)
-{
+static void pty_device_vanishes_and_returns(void **state) {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
     sensor_start_standard(&s, true);
@@ -697,15 +689,13 @@ typedef struct {
     int n;
 } collected_t;
 
-static void collect(void *ctx, const loadid_modbus_ft_sample_t *s)
-{
+static void collect(void *ctx, const loadid_modbus_ft_sample_t *s) {
     collected_t *c = ctx;
     if (c->n < 4096) c->got[c->n] = *s;
     c->n++;
 }
 
-static loadid_config_t poller_cfg(double rate_hz)
-{
+static loadid_config_t poller_cfg(double rate_hz) {
     loadid_config_t c;
     loadid_config_default(&c);
     snprintf(c.modbus_device, sizeof c.modbus_device, "%s", g_link);
@@ -715,8 +705,7 @@ static loadid_config_t poller_cfg(double rate_hz)
 }
 
 /* Runs the loop's side for ms: epoll on the eventfd, drain. */
-static void run_loop(loadid_modbus_input_t *in, collected_t *c, int ms)
-{
+static void run_loop(loadid_modbus_input_t *in, collected_t *c, int ms) {
     const int ep = epoll_create1(0);
     assert_true(ep >= 0);
     struct epoll_event ev = {.events = EPOLLIN};
@@ -729,8 +718,7 @@ static void run_loop(loadid_modbus_input_t *in, collected_t *c, int ms)
     close(ep);
 }
 
-static void poller_delivers_in_order(void **state)
-{
+static void poller_delivers_in_order(void **state) {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
     sensor_start(&s, 8, 6, true);
@@ -766,10 +754,10 @@ static void poller_delivers_in_order(void **state)
     sensor_stop(&s);
 
     const int64_t answered = s.final.replies - s.final.holding_reads;
-    print_message("    poller: %d samples in 0.4 s at 500 Hz; sensor answered %lld input reads, "
-                  "%lld silent; missed cycles %lld\n",
-                  c.n, (long long)answered, (long long)s.final.silent,
-                  (long long)st.cycles_missed);
+    print_message(
+        "    poller: %d samples in 0.4 s at 500 Hz; sensor answered %lld input reads, "
+        "%lld silent; missed cycles %lld\n",
+        c.n, (long long)answered, (long long)s.final.silent, (long long)st.cycles_missed);
     assert_true(c.n > 50);
     assert_int_equal(c.n, answered);
     assert_int_equal(st.samples_delivered, c.n);
@@ -797,8 +785,7 @@ static void poller_delivers_in_order(void **state)
     assert_true(rate > 150 && rate < 520); /* loose below: a loaded machine */
 }
 
-static bool wait_for(loadid_modbus_input_t *in, int64_t connected, int ms)
-{
+static bool wait_for(loadid_modbus_input_t *in, int64_t connected, int ms) {
     const int64_t end = mono_ms() + ms;
     loadid_modbus_input_stats_t st;
     do {
@@ -809,8 +796,7 @@ static bool wait_for(loadid_modbus_input_t *in, int64_t connected, int ms)
     return false;
 }
 
-static void poller_device_loss(void **state)
-{
+static void poller_device_loss(void **state) {
     (void)state;
     static sensor_t s; /* static: a failed assertion leaves its thread running */
     sensor_start_standard(&s, true);
@@ -842,7 +828,8 @@ static void poller_device_loss(void **state)
     assert_int_equal(st.lost_error, LOADID_MODBUS_FT_E_GONE);
     loadid_modbus_input_drain(in, collect, &c); /* the first sensor's last ones */
     const int before = c.n;
-    for (int i = 1; i < before && i < 4096; ++i) assert_int_equal(c.got[i].counter, c.got[i - 1].counter + 1);
+    for (int i = 1; i < before && i < 4096; ++i)
+        assert_int_equal(c.got[i].counter, c.got[i - 1].counter + 1);
     sensor_start_standard(&s, true); /* it comes back */
     assert_true(wait_for(in, 1, 3000));
     run_loop(in, &c, 150);
@@ -860,8 +847,7 @@ static void poller_device_loss(void **state)
 
 /* The poller thread's id, found by its name ("loadid-modbus", which it
  * gives itself as it starts: waits up to 2 s); 0 when there is none. */
-static pid_t poller_tid(int wait_ms)
-{
+static pid_t poller_tid(int wait_ms) {
     const int64_t end = mono_ms() + wait_ms;
     do {
         DIR *d = opendir("/proc/self/task");
@@ -891,8 +877,7 @@ static pid_t poller_tid(int wait_ms)
  * does not exist is refused with the key in the reason, and no poller
  * thread is left. SCHED_FIFO needs root (or CAP_SYS_NICE): CI's tests run
  * as root. */
-static void poller_realtime_attributes(void **state)
-{
+static void poller_realtime_attributes(void **state) {
     (void)state;
     if (geteuid() != 0) {
         const char *ci = getenv("CI");
@@ -908,7 +893,9 @@ static void poller_realtime_attributes(void **state)
         if (CPU_ISSET(c, &mine)) cpu = c;
     const struct {
         int priority, cpu, policy, poller_priority;
-    } cases[] = {{20, cpu, SCHED_FIFO, 19}, {1, -1, SCHED_FIFO, 1}, {0, cpu, SCHED_OTHER, 0},
+    } cases[] = {{20, cpu, SCHED_FIFO, 19},
+                 {1, -1, SCHED_FIFO, 1},
+                 {0, cpu, SCHED_OTHER, 0},
                  {0, -1, SCHED_OTHER, 0}};
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         loadid_config_t cfg = poller_cfg(200.0); /* no sensor: the thread retries opens */
@@ -925,9 +912,10 @@ static void poller_realtime_attributes(void **state)
         assert_int_equal(sched_getparam(tid, &sp), 0);
         assert_int_equal(sched_getaffinity(tid, sizeof set, &set), 0);
         loadid_modbus_input_stop(in);
-        print_message("    realtime.priority %d, cpu %d: poller policy %d priority %d on %d "
-                      "CPUs\n", cases[k].priority, cases[k].cpu, policy, sp.sched_priority,
-                      CPU_COUNT(&set));
+        print_message(
+            "    realtime.priority %d, cpu %d: poller policy %d priority %d on %d "
+            "CPUs\n",
+            cases[k].priority, cases[k].cpu, policy, sp.sched_priority, CPU_COUNT(&set));
         assert_int_equal(policy, cases[k].policy);
         assert_int_equal(sp.sched_priority, cases[k].poller_priority);
         if (cases[k].cpu >= 0) {
@@ -949,8 +937,7 @@ static void poller_realtime_attributes(void **state)
 
 /* loadid-modbus-sim (tools/modbus_sim), when ctest says where it is: its
  * constant wrench read back through the driver. */
-static void simulator_serves_a_constant_wrench(void **state)
-{
+static void simulator_serves_a_constant_wrench(void **state) {
     (void)state;
     const char *exe = getenv("LOADID_MODBUS_SIM");
     if (!exe || !exe[0]) {
@@ -1008,8 +995,7 @@ static void simulator_serves_a_constant_wrench(void **state)
     assert_int_equal(WEXITSTATUS(status), 0);
 }
 
-int main(void)
-{
+int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(decoder_si_values),
         cmocka_unit_test(decoder_status_bits),

@@ -33,8 +33,7 @@
 static char g_dir[128];
 static char g_file[256];
 
-static int setup_dir(void **state)
-{
+static int setup_dir(void **state) {
     (void)state;
     snprintf(g_dir, sizeof g_dir, "/tmp/loadid_test_modbus_cfg_XXXXXX"); /* mkdtemp template */
     if (!mkdtemp(g_dir)) return -1;
@@ -42,8 +41,7 @@ static int setup_dir(void **state)
     return 0;
 }
 
-static int teardown_dir(void **state)
-{
+static int teardown_dir(void **state) {
     (void)state;
     unlink(g_file);
     rmdir(g_dir);
@@ -51,15 +49,13 @@ static int teardown_dir(void **state)
 }
 
 static int warnings;
-static void count_warning(void *ctx, const char *msg)
-{
+static void count_warning(void *ctx, const char *msg) {
     (void)ctx;
     print_message("    warning: %s\n", msg);
     ++warnings;
 }
 
-static int load_text(const char *text, loadid_config_t *cfg, char *err, size_t len)
-{
+static int load_text(const char *text, loadid_config_t *cfg, char *err, size_t len) {
     FILE *f = fopen(g_file, "wb");
     assert_non_null(f);
     fputs(text, f);
@@ -69,8 +65,7 @@ static int load_text(const char *text, loadid_config_t *cfg, char *err, size_t l
 }
 
 /* The whole message: "<file>:" rest. */
-static void expect_error(const char *text, const char *rest, int whole)
-{
+static void expect_error(const char *text, const char *rest, int whole) {
     loadid_config_t cfg;
     char err[512], want[512];
     assert_int_equal(load_text(text, &cfg, err, sizeof err), -EINVAL);
@@ -81,8 +76,7 @@ static void expect_error(const char *text, const char *rest, int whole)
     }
 }
 
-static void config_errors(void **state)
-{
+static void config_errors(void **state) {
     (void)state;
     /* The default source, kf, takes a - g and alpha from the joints. */
     loadid_config_t ok;
@@ -97,20 +91,21 @@ static void config_errors(void **state)
                  "4: sensor.type: a Modbus F/T sensor has no accelerometer: estimation.signals "
                  "must be kf or setpoint, got mixed",
                  1);
-    expect_error("sensor:\n  type: can\n", "2: sensor.type: unknown sensor type 'can' (jr3 or modbus)",
-                 1);
+    expect_error("sensor:\n  type: can\n",
+                 "2: sensor.type: unknown sensor type 'can' (jr3 or modbus)", 1);
     expect_error("modbus:\n  device: /dev/ttyS0\n  baud: 12345\n",
                  "3: modbus.baud: unsupported baud rate 12345 (", 0);
     expect_error("modbus:\n  baud: fast\n", "2: modbus.baud: ", 0);
     expect_error("modbus:\n  parity: mark\n",
                  "2: modbus.parity: unknown parity 'mark' (none, even or odd)", 1);
-    expect_error("modbus:\n  parity: N\n", "2: modbus.parity: unknown parity 'N' (none, even or odd)",
-                 1);
+    expect_error("modbus:\n  parity: N\n",
+                 "2: modbus.parity: unknown parity 'N' (none, even or odd)", 1);
     expect_error("modbus:\n  slave_id: 0\n", "2: modbus.slave_id: must be 1..247, got 0", 1);
     expect_error("modbus:\n  data_bits: 9\n", "2: modbus.data_bits: must be 5..8, got 9", 1);
     expect_error("modbus:\n  stop_bits: 3\n", "2: modbus.stop_bits: must be 1..2, got 3", 1);
     expect_error("modbus:\n  rate_hz: 0\n", "2: modbus.rate_hz: must be > 0, got 0", 1);
-    expect_error("modbus:\n  rate_hz: 2000\n", "2: modbus.rate_hz: must be <= 1000 Hz, got 2000", 1);
+    expect_error("modbus:\n  rate_hz: 2000\n", "2: modbus.rate_hz: must be <= 1000 Hz, got 2000",
+                 1);
     expect_error("modbus:\n  timeout_ms: 0\n", "2: modbus.timeout_ms: must be 1..60000, got 0", 1);
     expect_error("modbus:\n  device: \"\"\n", "2: modbus.device: must not be empty", 1);
     expect_error("modbus:\n  full_scale:\n    force: [1, 2]\n", "3: modbus.full_scale.force: ", 0);
@@ -118,8 +113,7 @@ static void config_errors(void **state)
                  "3: modbus.full_scale.moment[1]: must be > 0, got -2", 1);
 }
 
-static void config_every_key_and_defaults(void **state)
-{
+static void config_every_key_and_defaults(void **state) {
     (void)state;
     loadid_config_t c;
     char err[512];
@@ -164,7 +158,8 @@ static void config_every_key_and_defaults(void **state)
     assert_int_equal(c.modbus_slave_id, 1);
     assert_true(c.modbus_rate_hz == 200.0);
     assert_int_equal(c.modbus_timeout_ms, 20);
-    for (int i = 0; i < 3; ++i) assert_true(c.modbus_fs_force[i] == 200.0 && c.modbus_fs_moment[i] == 12.0);
+    for (int i = 0; i < 3; ++i)
+        assert_true(c.modbus_fs_force[i] == 200.0 && c.modbus_fs_moment[i] == 12.0);
     loadid_config_t d;
     loadid_config_default(&d);
     assert_string_equal(d.modbus_device, c.modbus_device);
@@ -174,12 +169,11 @@ static void config_every_key_and_defaults(void **state)
 
 /* modbus.baud: the configuration accepts exactly the rates the driver can
  * set (libmodbus' list), and the 19 of these candidates that it holds. */
-static void config_bauds_match_the_driver(void **state)
-{
+static void config_bauds_match_the_driver(void **state) {
     (void)state;
-    const int cand[] = {0,      50,     110,    134,     300,     1200,    9600,    14400,
-                        19200,  28800,  38400,  57600,   76800,   115200,  128000,  230400,
-                        250000, 460800, 500000, 576000,  921600,  1000000, 1152000, 1500000,
+    const int cand[] = {0,       50,      110,     134,     300,    1200,    9600,    14400,
+                        19200,   28800,   38400,   57600,   76800,  115200,  128000,  230400,
+                        250000,  460800,  500000,  576000,  921600, 1000000, 1152000, 1500000,
                         2000000, 3000000, 4000000, 5000000, -9600};
     int accepted = 0;
     for (size_t i = 0; i < sizeof cand / sizeof cand[0]; ++i) {
@@ -192,15 +186,16 @@ static void config_bauds_match_the_driver(void **state)
                      ok ? "refuses" : "accepts");
         accepted += ok;
     }
-    assert_int_equal(accepted, 19); /* 110 300 1200 9600 19200 38400 57600 115200 230400 460800 500000 576000 921600 1e6 1152000 1.5e6 2e6 3e6 4e6 */
+    assert_int_equal(
+        accepted,
+        19); /* 110 300 1200 9600 19200 38400 57600 115200 230400 460800 500000 576000 921600 1e6 1152000 1.5e6 2e6 3e6 4e6 */
 }
 
 /* ------------------------------------------------------------ pipeline */
 
 /* A Modbus F/T sample as the daemon hands it over: no accelerometer. */
 static void ft_sample(loadid_pipeline_t *p, int64_t t_us, const double f[3], const double tq[3],
-                      int sat, int bad)
-{
+                      int sat, int bad) {
     loadid_sensor_sample_t s = {.t_us = t_us, .saturated = sat != 0, .faulty = bad != 0};
     memcpy(s.force, f, sizeof s.force);
     memcpy(s.torque, tq, sizeof s.torque);
@@ -215,8 +210,7 @@ typedef struct {
  * each; ZERO at 1 ms, START at 300 ms, STOP at 800 ms. Sample i (time
  * i ms - 0.5 ms) is saturated when i % 5 == 0 and faulty when i % 7 == 0,
  * and then carries an absurd wrench. */
-static void run(loadid_pipeline_t *p, tally_t *t, int64_t t0)
-{
+static void run(loadid_pipeline_t *p, tally_t *t, int64_t t0) {
     const double q[6] = {0.1, -0.4, 1.2, 0.0, 0.6, 0.0};
     memset(t, 0, sizeof *t);
     for (int i = 1; i < 1000; ++i) {
@@ -243,8 +237,7 @@ static void run(loadid_pipeline_t *p, tally_t *t, int64_t t0)
     loadid_pipeline_finish(p, t0 + 1000000);
 }
 
-static void pipeline_never_feeds_saturated_or_faulty(void **state)
-{
+static void pipeline_never_feeds_saturated_or_faulty(void **state) {
     (void)state;
     loadid_config_t cfg;
     loadid_config_default(&cfg);
@@ -261,12 +254,14 @@ static void pipeline_never_feeds_saturated_or_faulty(void **state)
     run(p, &t, 1700000000000000LL);
     loadid_pipeline_status_t st;
     loadid_pipeline_status(p, &st);
-    print_message("    fed %lld clean (%lld in the window), %lld saturated, %lld faulty; "
-                  "pipeline: ok %lld used %lld saturated %lld faulty %lld, state %d\n",
-                  (long long)t.clean, (long long)t.clean_in_window, (long long)t.fed_saturated,
-                  (long long)t.fed_faulty, (long long)st.samples_ok, (long long)st.samples_used,
-                  (long long)st.samples_saturated, (long long)st.samples_faulty, st.state);
-    assert_int_equal(t.clean_in_window, 500 - 100 - 72 + 14); /* i = 301..800: 100 x5, 72 x7, 14 x35 */
+    print_message(
+        "    fed %lld clean (%lld in the window), %lld saturated, %lld faulty; "
+        "pipeline: ok %lld used %lld saturated %lld faulty %lld, state %d\n",
+        (long long)t.clean, (long long)t.clean_in_window, (long long)t.fed_saturated,
+        (long long)t.fed_faulty, (long long)st.samples_ok, (long long)st.samples_used,
+        (long long)st.samples_saturated, (long long)st.samples_faulty, st.state);
+    assert_int_equal(t.clean_in_window,
+                     500 - 100 - 72 + 14); /* i = 301..800: 100 x5, 72 x7, 14 x35 */
     assert_int_equal(st.samples_saturated, t.fed_saturated);
     assert_int_equal(st.samples_faulty, t.fed_faulty);
     assert_int_equal(st.samples_ok, t.clean);
@@ -304,8 +299,7 @@ static void pipeline_never_feeds_saturated_or_faulty(void **state)
     loadid_pipeline_destroy(p);
 }
 
-int main(void)
-{
+int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(config_errors),
         cmocka_unit_test(config_every_key_and_defaults),

@@ -112,13 +112,16 @@ static int signals_run(workload_t *w) {
         /* The fixed-lag smoother serves a sample 20 joint states later. */
         if (loadid_signals_push_joints(w->sig_lag, w->t_us[k], NJ, w->q[k], w->q[k]) != 0) ++bad;
         if (k >= 21 && loadid_signals_last_joint_time(w->sig_lag) != w->t_us[k - 19] - 1) ++bad;
-        if (k >= 21 &&
-            loadid_signals_at(w->sig_lag, w->t_us[k - 20] + 300, spec, alpha, NULL, &m, &instr) !=
-                (k - 20 < w->settle ? LOADID_E_STALE : 0))
+        if (k >= 21 && loadid_signals_at(w->sig_lag, w->t_us[k - 20] + 300, spec, alpha, NULL, &m,
+                                         &instr) != (k - 20 < w->settle ? LOADID_E_STALE : 0))
             ++bad;
         if (k == NSAMPLES / 2) {
-            if (loadid_signals_push_joints(w->sig, w->t_us[k], NJ, w->q[k], NULL) != LOADID_E_TIME_ORDER) ++bad;
-            if (loadid_signals_at(w->sig, w->t_us[k] + 60000, spec, alpha, NULL, &m, &instr) != LOADID_E_STALE) ++bad;
+            if (loadid_signals_push_joints(w->sig, w->t_us[k], NJ, w->q[k], NULL) !=
+                LOADID_E_TIME_ORDER)
+                ++bad;
+            if (loadid_signals_at(w->sig, w->t_us[k] + 60000, spec, alpha, NULL, &m, &instr) !=
+                LOADID_E_STALE)
+                ++bad;
             loadid_kin_state_t st;
             if (loadid_signals_kinematics_at(w->sig, w->t_us[k], &st) != 0) ++bad;
         }
@@ -126,7 +129,8 @@ static int signals_run(workload_t *w) {
     loadid_jf_config_t jcfg;
     loadid_jf_config_default(&jcfg);
     if (loadid_jf_smooth(&jcfg, NSAMPLES, w->t_us, w->q1, w->smooth_work, w->smoothed[0],
-                         w->smoothed[1], w->smoothed[2]) != 0) ++bad;
+                         w->smoothed[1], w->smoothed[2]) != 0)
+        ++bad;
     if (loadid_signals_reset(w->sig) != 0) ++bad;
     if (loadid_signals_reset(w->sig_lag) != 0) ++bad;
     return bad;
@@ -134,10 +138,15 @@ static int signals_run(workload_t *w) {
 
 static void workload_make(workload_t *w) {
     const loadid_synth_noise_t noise = {
-        .sigma_f = 0.1, .sigma_tau = 0.005, .sigma_spec = 0.5, .sigma_alpha = 5.0, .sigma_omega = 0.02,
+        .sigma_f = 0.1,
+        .sigma_tau = 0.005,
+        .sigma_spec = 0.5,
+        .sigma_alpha = 5.0,
+        .sigma_omega = 0.02,
     };
     for (int i = 0; i < 2; ++i) {
-        dataset_spec_t spec = {.seed = 9, .n_samples = NSAMPLES, .n_params = i ? 16 : 10, .noise = noise};
+        dataset_spec_t spec = {
+            .seed = 9, .n_samples = NSAMPLES, .n_params = i ? 16 : 10, .noise = noise};
         assert_int_equal(dataset_make(&spec, &w->d[i]), 0);
         for (int m = 0; m < 5; ++m) {
             loadid_est_config_t cfg;
@@ -169,7 +178,9 @@ static int workload_run(workload_t *w) {
     for (int i = 0; i < NEST; ++i) {
         const dataset_t *d = &w->d[i / 5];
         for (int k = 0; k < NSAMPLES; ++k) {
-            if (loadid_est_update(w->est[i], dataset_A(d, k), dataset_C(d, k), dataset_y(d, k)) != 0) ++bad;
+            if (loadid_est_update(w->est[i], dataset_A(d, k), dataset_C(d, k), dataset_y(d, k)) !=
+                0)
+                ++bad;
             const int r = k % 15; /* gaps of 1, 2, 3, 4 and 5 samples */
             if (k <= 20 || r == 0 || r == 2 || r == 5 || r == 9 || r == 14) {
                 loadid_real_t phi[16];
@@ -181,7 +192,9 @@ static int workload_run(workload_t *w) {
                 loadid_real_t y[6];
                 memcpy(y, dataset_y(d, k), sizeof y);
                 y[2] = (loadid_real_t)__builtin_nan("");
-                if (loadid_est_update(w->est[i], dataset_A(d, k), dataset_C(d, k), y) != LOADID_E_NONFINITE) ++bad;
+                if (loadid_est_update(w->est[i], dataset_A(d, k), dataset_C(d, k), y) !=
+                    LOADID_E_NONFINITE)
+                    ++bad;
             }
         }
         loadid_real_t phi[16], std[16], scale;
@@ -261,7 +274,8 @@ static void test_update_and_estimate_make_no_system_call(void **state) {
     int status = 0;
     assert_int_equal(waitpid(pid, &status, 0), pid);
     if (WIFSIGNALED(status))
-        print_message("child killed by signal %d: a system call in the per-sample path\n", WTERMSIG(status));
+        print_message("child killed by signal %d: a system call in the per-sample path\n",
+                      WTERMSIG(status));
     assert_true(WIFEXITED(status));
     assert_int_equal(WEXITSTATUS(status), 0);
     assert_int_equal(n, 1);

@@ -28,8 +28,8 @@
 
 static loadid_noise_acc_t acc; /* large: off the stack */
 
-static const double kSigma[LOADID_NOISE_CHANNELS] = {0.1,  0.12, 0.08, 0.005, 0.004, 0.006,
-                                                     0.5,  0.4,  0.6,  5.0,   4.0,   6.0};
+static const double kSigma[LOADID_NOISE_CHANNELS] = {0.1, 0.12, 0.08, 0.005, 0.004, 0.006,
+                                                     0.5, 0.4,  0.6,  5.0,   4.0,   6.0};
 
 static void test_still_window_is_robust(void **state) {
     (void)state;
@@ -48,7 +48,8 @@ static void test_still_window_is_robust(void **state) {
         double s[LOADID_NOISE_CHANNELS];
         assert_int_equal(loadid_noise_acc_sigma(&acc, 10, s), LOADID_NOISE_STILL);
         double worst = 0;
-        for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i) worst = fmax(worst, fabs(s[i] / kSigma[i] - 1));
+        for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i)
+            worst = fmax(worst, fabs(s[i] / kSigma[i] - 1));
         print_message("still window%s: worst relative error of sigma %.3f\n",
                       spikes ? " with 5 % spikes" : "", worst);
         /* 400 samples: the MAD's own spread is about 6 % (37 % efficiency),
@@ -79,8 +80,10 @@ static void test_third_differences_while_moving(void **state) {
     assert_int_equal(loadid_noise_acc_sigma(&acc, 10, s), LOADID_NOISE_DIFFERENCES);
     double worst = 0;
     for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i) worst = fmax(worst, fabs(s[i] / kSigma[i] - 1));
-    print_message("third differences, 2 Hz motion 200 sigma high, a gap: worst relative error "
-                  "%.3f\n", worst);
+    print_message(
+        "third differences, 2 Hz motion 200 sigma high, a gap: worst relative error "
+        "%.3f\n",
+        worst);
     assert_true(worst < 0.12);
 }
 

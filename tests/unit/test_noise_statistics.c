@@ -32,13 +32,18 @@ static double inertia_error(const loadid_real_t *phi, const double *truth) {
 static void test_rtls_beats_rls_on_inertia_over_seeds(void **state) {
     (void)state;
     const loadid_synth_noise_t noise = {
-        .sigma_f = 0.1, .sigma_tau = 0.005, .sigma_spec = 0.5, .sigma_alpha = 5.0, .sigma_omega = 0.02,
+        .sigma_f = 0.1,
+        .sigma_tau = 0.005,
+        .sigma_spec = 0.5,
+        .sigma_alpha = 5.0,
+        .sigma_omega = 0.02,
         .offset = {1.0, -2.0, 0.5, 0.05, 0.02, -0.04},
     };
     int rtls_wins = 0;
     double sum_rls = 0, sum_rtls = 0;
     for (int seed = 1; seed <= kSeeds; ++seed) {
-        dataset_spec_t spec = {.seed = (uint64_t)seed * 1000003u, .n_samples = 1500, .n_params = 10, .noise = noise};
+        dataset_spec_t spec = {
+            .seed = (uint64_t)seed * 1000003u, .n_samples = 1500, .n_params = 10, .noise = noise};
         dataset_t d;
         assert_int_equal(dataset_make(&spec, &d), 0);
         double e[2];
@@ -55,8 +60,8 @@ static void test_rtls_beats_rls_on_inertia_over_seeds(void **state) {
         if (e[1] < e[0]) ++rtls_wins;
         dataset_free(&d);
     }
-    print_message("%d seeds: mean inertia error RLS %.1f %%, RTLS %.1f %%; RTLS better in %d\n", kSeeds,
-                  sum_rls / kSeeds, sum_rtls / kSeeds, rtls_wins);
+    print_message("%d seeds: mean inertia error RLS %.1f %%, RTLS %.1f %%; RTLS better in %d\n",
+                  kSeeds, sum_rls / kSeeds, sum_rtls / kSeeds, rtls_wins);
     /* Thresholds: RTLS wins in at least 90 % of the seeds and halves the
      * mean error; and its own mean error stays within 2.3x of the 4.4 % it
      * shows (RLS 28 %), so that RTLS getting worse fails even while RLS is

@@ -164,9 +164,10 @@ static void test_regressor_matches_newton_euler(void **state) {
         if (e_apply > worst_apply) worst_apply = e_apply;
         if (e_hand > worst_hand) worst_hand = e_hand;
     }
-    print_message("eq. (6) vs eqs. (1)-(2), %d random states: worst relative error "
-                  "%.3g (apply), %.3g (hand product)\n",
-                  N_RANDOM_STATES, worst_apply, worst_hand);
+    print_message(
+        "eq. (6) vs eqs. (1)-(2), %d random states: worst relative error "
+        "%.3g (apply), %.3g (hand product)\n",
+        N_RANDOM_STATES, worst_apply, worst_hand);
 }
 
 /* Column j of A is the wrench of the unit "load" e_j (eqs. (1)-(2) are
@@ -257,9 +258,10 @@ static void test_zeroing_matches_zeroed_wrench(void **state) {
         assert_rel_below(err, REL_TOL, "(A + Z(g_init)) phi vs zeroed wrench", k);
         if (err > worst) worst = err;
     }
-    print_message("eqs. (7)-(9) vs zeroed eqs. (1)-(2), %d random states: worst relative "
-                  "error %.3g\n",
-                  N_RANDOM_STATES, worst);
+    print_message(
+        "eqs. (7)-(9) vs zeroed eqs. (1)-(2), %d random states: worst relative "
+        "error %.3g\n",
+        N_RANDOM_STATES, worst);
 }
 
 /* loadid_regressor_model: each of its three models against eqs. (1)-(2)
@@ -439,7 +441,7 @@ static void test_regressor_rejects_nonfinite(void **state) {
     (void)state;
     const double bad_values[3] = {NAN, INFINITY, -INFINITY};
     const double good[3][3] = {{1.0, -2.0, 9.0}, {0.1, 0.2, -0.3}, {5.0, -4.0, 3.0}};
-    for (int which = 0; which < 3; ++which) {          /* spec, omega, alpha */
+    for (int which = 0; which < 3; ++which) { /* spec, omega, alpha */
         for (int comp = 0; comp < 3; ++comp) {
             for (int b = 0; b < 3; ++b) {
                 double in[3][3], A[60], A_before[60];
@@ -514,8 +516,8 @@ static void test_apply_rejects_bad_param_count(void **state) {
 
 static void test_strerror(void **state) {
     (void)state;
-    const int codes[] = {0, LOADID_E_NONFINITE, LOADID_E_NOT_EXCITED, LOADID_E_NO_SOLUTION,
-                         LOADID_E_FULL, -EINVAL};
+    const int codes[] = {
+        0, LOADID_E_NONFINITE, LOADID_E_NOT_EXCITED, LOADID_E_NO_SOLUTION, LOADID_E_FULL, -EINVAL};
     const int n = (int)(sizeof codes / sizeof codes[0]);
     const char *text[sizeof codes / sizeof codes[0]];
     for (int i = 0; i < n; ++i) {

@@ -30,7 +30,11 @@ static const double kOrthoBound = 50 * 2.220446049250313e-16 * kUpdates;
 
 static void run(double ortho_tol, double *final_error, int *reorth, double *phi_err) {
     const loadid_synth_noise_t noise = {
-        .sigma_f = 0.1, .sigma_tau = 0.005, .sigma_spec = 0.5, .sigma_alpha = 5.0, .sigma_omega = 0.02,
+        .sigma_f = 0.1,
+        .sigma_tau = 0.005,
+        .sigma_spec = 0.5,
+        .sigma_alpha = 5.0,
+        .sigma_omega = 0.02,
     };
     dataset_spec_t spec = {.seed = 77, .n_samples = kUpdates, .n_params = 10, .noise = noise};
     dataset_t d;
@@ -73,8 +77,10 @@ static void test_orthogonality_drift_is_bounded(void **state) {
     double err, phi_err;
     int reorth;
     run(0.0, &err, &reorth, &phi_err);
-    print_message("%d updates, no re-orthogonalisation: max ||U^T U - I||_F = %.3e (bound %.0e), phi vs batch TLS %.2e\n",
-                  kUpdates, err, kOrthoBound, phi_err);
+    print_message(
+        "%d updates, no re-orthogonalisation: max ||U^T U - I||_F = %.3e (bound %.0e), phi vs "
+        "batch TLS %.2e\n",
+        kUpdates, err, kOrthoBound, phi_err);
     assert_int_equal(reorth, 0);
     assert_true(err < kOrthoBound);
     assert_true(phi_err < 1e-8);
@@ -87,8 +93,10 @@ static void test_reorthogonalisation_holds_tight_bound(void **state) {
     double err, phi_err;
     int reorth;
     run(tol, &err, &reorth, &phi_err);
-    print_message("tolerance %.0e: %d re-orthogonalisations, max error after each update %.3e, phi vs batch %.2e\n", tol,
-                  reorth, err, phi_err);
+    print_message(
+        "tolerance %.0e: %d re-orthogonalisations, max error after each update %.3e, phi vs batch "
+        "%.2e\n",
+        tol, reorth, err, phi_err);
     assert_true(reorth > 0);
     assert_true(err <= tol);
     assert_true(phi_err < 1e-8);

@@ -172,8 +172,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(saves_in_order, make_dir, remove_dir),
         cmocka_unit_test_setup_teardown(failure_comes_back_as_the_reason, make_dir, remove_dir),
-        cmocka_unit_test_setup_teardown(stalled_disk_does_not_hold_up_submit, make_dir,
-                                        remove_dir),
+        cmocka_unit_test_setup_teardown(stalled_disk_does_not_hold_up_submit, make_dir, remove_dir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -68,7 +68,9 @@ static void quad_at(const quad_t *p, double t, loadid_real_t out[3 * NJ]) {
     }
 }
 
-static double seconds(int64_t t_us) { return (double)t_us * 1e-6; }
+static double seconds(int64_t t_us) {
+    return (double)t_us * 1e-6;
+}
 
 /* Pushes joint states every 1000 us over [from, to), both streams. */
 static void push_range(loadid_signals_t *s, int64_t from, int64_t to) {
@@ -141,10 +143,18 @@ static void sources_take_each_quantity_from_their_input(void **state) {
         assert_int_equal(loadid_signals_at(s, t_sample, kJr3Spec, kJr3Alpha, NULL, &m, &instr), 0);
         const loadid_real_t *spec = NULL, *omega = NULL, *alpha = NULL;
         switch (src) {
-            case LOADID_SIGNALS_SENSOR: spec = kJr3Spec, omega = meas.omega, alpha = kJr3Alpha; break;
-            case LOADID_SIGNALS_KF: spec = meas.spec, omega = meas.omega, alpha = meas.alpha; break;
-            case LOADID_SIGNALS_SETPOINT: spec = set.spec, omega = set.omega, alpha = set.alpha; break;
-            case LOADID_SIGNALS_MIXED: spec = kJr3Spec, omega = meas.omega, alpha = meas.alpha; break;
+            case LOADID_SIGNALS_SENSOR:
+                spec = kJr3Spec, omega = meas.omega, alpha = kJr3Alpha;
+                break;
+            case LOADID_SIGNALS_KF:
+                spec = meas.spec, omega = meas.omega, alpha = meas.alpha;
+                break;
+            case LOADID_SIGNALS_SETPOINT:
+                spec = set.spec, omega = set.omega, alpha = set.alpha;
+                break;
+            case LOADID_SIGNALS_MIXED:
+                spec = kJr3Spec, omega = meas.omega, alpha = meas.alpha;
+                break;
         }
         assert_vec(m.spec, spec, tol, "spec");
         assert_vec(m.omega, omega, tol, "omega");
@@ -163,7 +173,8 @@ static void sources_take_each_quantity_from_their_input(void **state) {
         assert_int_equal(loadid_signals_stats(s, &st), 0);
         assert_int_equal(st.joint_msgs_ok, 2001);
         assert_int_equal(st.samples_ok, 1);
-        assert_int_equal(st.joint_msgs_bad + st.samples_stale + st.samples_no_joints + st.samples_bad, 0);
+        assert_int_equal(
+            st.joint_msgs_bad + st.samples_stale + st.samples_no_joints + st.samples_bad, 0);
         loadid_signals_destroy(s);
     }
 }
@@ -254,7 +265,8 @@ static void stale_and_missing_joints_are_refused_and_counted(void **state) {
     assert_int_equal(loadid_signals_at(s, 4999, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_STALE);
     assert_int_equal(loadid_signals_at(s, INT64_MIN + 1, kJr3Spec, NULL, NULL, &m, NULL),
                      LOADID_E_STALE);
-    assert_int_equal(loadid_signals_at(s, INT64_MAX, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_STALE);
+    assert_int_equal(loadid_signals_at(s, INT64_MAX, kJr3Spec, NULL, NULL, &m, NULL),
+                     LOADID_E_STALE);
     assert_memory_equal(&m, &untouched, sizeof m);
     /* RIV's instruments need setpoints: a stream without them is refused.
      * Its first joint states serve nothing while the filter settles. */
@@ -266,7 +278,8 @@ static void stale_and_missing_joints_are_refused_and_counted(void **state) {
         quad_at(&kMeasured, k * 1e-3, q);
         assert_int_equal(loadid_signals_push_joints(s, 1000 * k, NJ, q, NULL), 0);
         if (k == 0)
-            assert_int_equal(loadid_signals_at(s, 0, kJr3Spec, NULL, NULL, &m, NULL), LOADID_E_STALE);
+            assert_int_equal(loadid_signals_at(s, 0, kJr3Spec, NULL, NULL, &m, NULL),
+                             LOADID_E_STALE);
     }
     const int64_t t1 = 1000 * settle;
     loadid_regressor_input_t instr;

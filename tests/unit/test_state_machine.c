@@ -23,18 +23,22 @@
 #include "loadid/pipeline.h"
 #include "loadid/urdf.h"
 
-enum { IDLE = LOADID_STATE_IDLE, ZEROING = LOADID_STATE_ZEROING,
-       ESTIMATING = LOADID_STATE_ESTIMATING, DONE = LOADID_STATE_DONE,
-       FAILED = LOADID_STATE_FAILED };
+enum {
+    IDLE = LOADID_STATE_IDLE,
+    ZEROING = LOADID_STATE_ZEROING,
+    ESTIMATING = LOADID_STATE_ESTIMATING,
+    DONE = LOADID_STATE_DONE,
+    FAILED = LOADID_STATE_FAILED
+};
 
 /* One step of a script, at t_ms after the first sample. */
 typedef enum {
-    END,      /* end of the script */
-    CMD,      /* a command (arg: LOADID_CMD_*) */
-    QUIET,    /* the inputs stop from t_ms on (the clock goes on in ticks) */
-    RESUME,   /* the inputs come again from t_ms */
-    RESTORE,  /* loadid_pipeline_restore of a saved estimate */
-    FINISH,   /* loadid_pipeline_finish: the input ended (offline) */
+    END,     /* end of the script */
+    CMD,     /* a command (arg: LOADID_CMD_*) */
+    QUIET,   /* the inputs stop from t_ms on (the clock goes on in ticks) */
+    RESUME,  /* the inputs come again from t_ms */
+    RESTORE, /* loadid_pipeline_restore of a saved estimate */
+    FINISH,  /* loadid_pipeline_finish: the input ended (offline) */
 } step_kind_t;
 
 typedef struct {
@@ -46,12 +50,12 @@ typedef struct {
 typedef struct {
     const char *name;
     step_t steps[10];
-    int run_to_ms;          /* samples (unless QUIET) and 10 ms ticks until then */
-    int states[10];         /* the sink's state changes in order, -1 ends */
+    int run_to_ms;  /* samples (unless QUIET) and 10 ms ticks until then */
+    int states[10]; /* the sink's state changes in order, -1 ends */
     int end_state;
-    const char *reason;     /* FAILED's reason contains this ("" for none) */
-    int complete;           /* -1: not checked */
-    int wrenches;           /* at least this many compensated wrenches; 0: none
+    const char *reason; /* FAILED's reason contains this ("" for none) */
+    int complete;       /* -1: not checked */
+    int wrenches;       /* at least this many compensated wrenches; 0: none
                                (a still robot excites nothing: no model, so
                                nothing is compensated after its runs) */
 } case_t;
@@ -59,70 +63,168 @@ typedef struct {
 /* Windows: zeroing.window_s 0.1, estimation.duration_s 0.3. */
 static const case_t kCases[] = {
     {"ZERO: zeroing for its window, then IDLE",
-     {{CMD, 10, LOADID_CMD_ZERO}, {END, 0, 0}}, 300,
-     {ZEROING, IDLE, -1}, IDLE, "", -1, 0},
+     {{CMD, 10, LOADID_CMD_ZERO}, {END, 0, 0}},
+     300,
+     {ZEROING, IDLE, -1},
+     IDLE,
+     "",
+     -1,
+     0},
     {"ZERO, START: estimating for its window, then DONE, complete",
-     {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 200, LOADID_CMD_START}, {END, 0, 0}}, 700,
-     {ZEROING, IDLE, ESTIMATING, DONE, -1}, DONE, "", 1, 0},
+     {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 200, LOADID_CMD_START}, {END, 0, 0}},
+     700,
+     {ZEROING, IDLE, ESTIMATING, DONE, -1},
+     DONE,
+     "",
+     1,
+     0},
     {"START during zeroing ends it and starts",
-     {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 60, LOADID_CMD_START}, {END, 0, 0}}, 500,
-     {ZEROING, IDLE, ESTIMATING, DONE, -1}, DONE, "", 1, 0},
+     {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 60, LOADID_CMD_START}, {END, 0, 0}},
+     500,
+     {ZEROING, IDLE, ESTIMATING, DONE, -1},
+     DONE,
+     "",
+     1,
+     0},
     {"START too early in zeroing: FAILED, too few samples",
-     {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 14, LOADID_CMD_START}, {END, 0, 0}}, 300,
-     {ZEROING, FAILED, -1}, FAILED, "zeroing:", 0, 0},
+     {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 14, LOADID_CMD_START}, {END, 0, 0}},
+     300,
+     {ZEROING, FAILED, -1},
+     FAILED,
+     "zeroing:",
+     0,
+     0},
     {"START without ZERO: FAILED",
-     {{CMD, 10, LOADID_CMD_START}, {END, 0, 0}}, 300,
-     {FAILED, -1}, FAILED, "START before a completed ZERO", 0, 0},
+     {{CMD, 10, LOADID_CMD_START}, {END, 0, 0}},
+     300,
+     {FAILED, -1},
+     FAILED,
+     "START before a completed ZERO",
+     0,
+     0},
     {"after FAILED, RESET is IDLE and a ZERO starts over",
-     {{CMD, 10, LOADID_CMD_START}, {CMD, 20, LOADID_CMD_RESET}, {CMD, 30, LOADID_CMD_ZERO},
-      {CMD, 200, LOADID_CMD_START}, {END, 0, 0}}, 600,
-     {FAILED, IDLE, ZEROING, IDLE, ESTIMATING, DONE, -1}, DONE, "", 1, 0},
+     {{CMD, 10, LOADID_CMD_START},
+      {CMD, 20, LOADID_CMD_RESET},
+      {CMD, 30, LOADID_CMD_ZERO},
+      {CMD, 200, LOADID_CMD_START},
+      {END, 0, 0}},
+     600,
+     {FAILED, IDLE, ZEROING, IDLE, ESTIMATING, DONE, -1},
+     DONE,
+     "",
+     1,
+     0},
     {"STOP ends the window early: DONE, complete",
-     {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 200, LOADID_CMD_START}, {CMD, 300, LOADID_CMD_STOP},
-      {END, 0, 0}}, 600,
-     {ZEROING, IDLE, ESTIMATING, DONE, -1}, DONE, "", 1, 0},
+     {{CMD, 10, LOADID_CMD_ZERO},
+      {CMD, 200, LOADID_CMD_START},
+      {CMD, 300, LOADID_CMD_STOP},
+      {END, 0, 0}},
+     600,
+     {ZEROING, IDLE, ESTIMATING, DONE, -1},
+     DONE,
+     "",
+     1,
+     0},
     {"STOP, ZERO and START ignored where they mean nothing",
-     {{CMD, 5, LOADID_CMD_STOP}, {CMD, 10, LOADID_CMD_ZERO}, {CMD, 200, LOADID_CMD_START},
-      {CMD, 250, LOADID_CMD_ZERO}, {CMD, 260, LOADID_CMD_START}, {END, 0, 0}}, 700,
-     {ZEROING, IDLE, ESTIMATING, DONE, -1}, DONE, "", 1, 0},
+     {{CMD, 5, LOADID_CMD_STOP},
+      {CMD, 10, LOADID_CMD_ZERO},
+      {CMD, 200, LOADID_CMD_START},
+      {CMD, 250, LOADID_CMD_ZERO},
+      {CMD, 260, LOADID_CMD_START},
+      {END, 0, 0}},
+     700,
+     {ZEROING, IDLE, ESTIMATING, DONE, -1},
+     DONE,
+     "",
+     1,
+     0},
     {"RESET while estimating: IDLE, nothing estimated",
-     {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 200, LOADID_CMD_START}, {CMD, 300, LOADID_CMD_RESET},
-      {END, 0, 0}}, 700,
-     {ZEROING, IDLE, ESTIMATING, IDLE, -1}, IDLE, "", 0, 0},
+     {{CMD, 10, LOADID_CMD_ZERO},
+      {CMD, 200, LOADID_CMD_START},
+      {CMD, 300, LOADID_CMD_RESET},
+      {END, 0, 0}},
+     700,
+     {ZEROING, IDLE, ESTIMATING, IDLE, -1},
+     IDLE,
+     "",
+     0,
+     0},
     {"RESET after DONE, then a second run",
-     {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 200, LOADID_CMD_START}, {CMD, 600, LOADID_CMD_RESET},
-      {CMD, 620, LOADID_CMD_ZERO}, {CMD, 800, LOADID_CMD_START}, {END, 0, 0}}, 1300,
-     {ZEROING, IDLE, ESTIMATING, DONE, IDLE, ZEROING, IDLE, ESTIMATING, DONE, -1}, DONE, "", 1,
+     {{CMD, 10, LOADID_CMD_ZERO},
+      {CMD, 200, LOADID_CMD_START},
+      {CMD, 600, LOADID_CMD_RESET},
+      {CMD, 620, LOADID_CMD_ZERO},
+      {CMD, 800, LOADID_CMD_START},
+      {END, 0, 0}},
+     1300,
+     {ZEROING, IDLE, ESTIMATING, DONE, IDLE, ZEROING, IDLE, ESTIMATING, DONE, -1},
+     DONE,
+     "",
+     1,
      0},
     {"ZERO after DONE zeroes again",
-     {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 200, LOADID_CMD_START}, {CMD, 600, LOADID_CMD_ZERO},
-      {END, 0, 0}}, 900,
-     {ZEROING, IDLE, ESTIMATING, DONE, ZEROING, IDLE, -1}, IDLE, "", -1, 0},
+     {{CMD, 10, LOADID_CMD_ZERO},
+      {CMD, 200, LOADID_CMD_START},
+      {CMD, 600, LOADID_CMD_ZERO},
+      {END, 0, 0}},
+     900,
+     {ZEROING, IDLE, ESTIMATING, DONE, ZEROING, IDLE, -1},
+     IDLE,
+     "",
+     -1,
+     0},
     {"inputs stop while estimating: the clock ends the window, incomplete",
      {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 200, LOADID_CMD_START}, {QUIET, 300, 0}, {END, 0, 0}},
      1000,
-     {ZEROING, IDLE, ESTIMATING, DONE, -1}, DONE, "", 0, 0},
+     {ZEROING, IDLE, ESTIMATING, DONE, -1},
+     DONE,
+     "",
+     0,
+     0},
     {"inputs stop while zeroing: the clock ends it",
-     {{CMD, 10, LOADID_CMD_ZERO}, {QUIET, 60, 0}, {END, 0, 0}}, 600,
-     {ZEROING, IDLE, -1}, IDLE, "", -1, 0},
+     {{CMD, 10, LOADID_CMD_ZERO}, {QUIET, 60, 0}, {END, 0, 0}},
+     600,
+     {ZEROING, IDLE, -1},
+     IDLE,
+     "",
+     -1,
+     0},
     {"inputs stop at once after ZERO: the clock fails it, too few samples",
-     {{CMD, 10, LOADID_CMD_ZERO}, {QUIET, 12, 0}, {END, 0, 0}}, 600,
-     {ZEROING, FAILED, -1}, FAILED, "zeroing:", 0, 0},
+     {{CMD, 10, LOADID_CMD_ZERO}, {QUIET, 12, 0}, {END, 0, 0}},
+     600,
+     {ZEROING, FAILED, -1},
+     FAILED,
+     "zeroing:",
+     0,
+     0},
     {"the input ends while estimating (offline): DONE, incomplete",
      {{CMD, 10, LOADID_CMD_ZERO}, {CMD, 200, LOADID_CMD_START}, {FINISH, 300, 0}, {END, 0, 0}},
      300,
-     {ZEROING, IDLE, ESTIMATING, DONE, -1}, DONE, "", 0, 0},
+     {ZEROING, IDLE, ESTIMATING, DONE, -1},
+     DONE,
+     "",
+     0,
+     0},
     /* A restore starts in DONE (pipeline.h): no change for the sink. The
      * samples up to 250 ms (the smoother's 50 ms before the last joint
      * state) less the 10 the joint filters serve none of while they
      * settle (joint_filter.h). */
     {"a restored result: DONE at once, wrenches compensated",
-     {{RESTORE, 0, 0}, {END, 0, 0}}, 300,
-     {-1}, DONE, "", -1, 240},
+     {{RESTORE, 0, 0}, {END, 0, 0}},
+     300,
+     {-1},
+     DONE,
+     "",
+     -1,
+     240},
     {"a restored result, then a new run",
      {{RESTORE, 0, 0}, {CMD, 100, LOADID_CMD_ZERO}, {CMD, 300, LOADID_CMD_START}, {END, 0, 0}},
      800,
-     {ZEROING, IDLE, ESTIMATING, DONE, -1}, DONE, "", 1, 90},
+     {ZEROING, IDLE, ESTIMATING, DONE, -1},
+     DONE,
+     "",
+     1,
+     90},
 };
 
 typedef struct {
@@ -197,19 +299,30 @@ static void run_case(const case_t *tc) {
         const int64_t now = T0 + (int64_t)ms * 1000;
         for (; tc->steps[s].kind != END && tc->steps[s].t_ms == ms; ++s) {
             switch (tc->steps[s].kind) {
-                case CMD: loadid_pipeline_command(p, now, tc->steps[s].arg, "box"); break;
-                case QUIET: quiet = 1; break;
-                case RESUME: quiet = 0; break;
-                case RESTORE: restore(p); break;
-                case FINISH: loadid_pipeline_finish(p, now), finished = 1; break;
-                case END: break;
+                case CMD:
+                    loadid_pipeline_command(p, now, tc->steps[s].arg, "box");
+                    break;
+                case QUIET:
+                    quiet = 1;
+                    break;
+                case RESUME:
+                    quiet = 0;
+                    break;
+                case RESTORE:
+                    restore(p);
+                    break;
+                case FINISH:
+                    loadid_pipeline_finish(p, now), finished = 1;
+                    break;
+                case END:
+                    break;
             }
         }
         if (finished) break;
         if (!quiet) {
             /* the F/T sample 0.5 ms before the joint state of the same ms */
-            const loadid_sensor_sample_t x = {.t_us = now - 500, .force = {0.2, -0.1, 9.81},
-                                              .torque = {0.01, 0.02, -0.01}};
+            const loadid_sensor_sample_t x = {
+                .t_us = now - 500, .force = {0.2, -0.1, 9.81}, .torque = {0.01, 0.02, -0.01}};
             loadid_pipeline_sample(p, &x);
             loadid_pipeline_joint_state(p, now, 6, Q, Q);
         }
@@ -224,15 +337,17 @@ static void run_case(const case_t *tc) {
         snprintf(got + strlen(got), sizeof got - strlen(got), " %d", rec.states[i]);
     for (int i = 0; i < want_n; ++i)
         snprintf(want + strlen(want), sizeof want - strlen(want), " %d", tc->states[i]);
-    print_message("    %-68s states%s (reason \"%s\", complete %d, %ld wrenches)\n", tc->name,
-                  got, st.state == FAILED ? rec.reason : "", st.complete, rec.wrenches);
+    print_message("    %-68s states%s (reason \"%s\", complete %d, %ld wrenches)\n", tc->name, got,
+                  st.state == FAILED ? rec.reason : "", st.complete, rec.wrenches);
     if (strcmp(got, want) != 0) fail_msg("%s: states%s, expected%s", tc->name, got, want);
     assert_int_equal(st.state, tc->end_state);
     if (tc->reason[0] && !strstr(rec.reason, tc->reason))
         fail_msg("%s: reason \"%s\" lacks \"%s\"", tc->name, rec.reason, tc->reason);
     if (tc->complete >= 0) assert_int_equal(st.complete, tc->complete);
-    if (tc->wrenches) assert_true(rec.wrenches >= tc->wrenches);
-    else assert_int_equal(rec.wrenches, 0);
+    if (tc->wrenches)
+        assert_true(rec.wrenches >= tc->wrenches);
+    else
+        assert_int_equal(rec.wrenches, 0);
     loadid_pipeline_destroy(p);
 }
 

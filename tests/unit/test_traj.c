@@ -66,8 +66,10 @@ static void derivatives_match_finite_differences(void **state) {
         for (int i = 0; i < 6; ++i) {
             /* central differences err by h^2/6 times the next derivative */
             ASSERT_CLOSE((qp[i] - qm[i]) / (2 * h), qd[i], 1e-6 * (1 + fabs(qd[i])), "qd vs dq/dt");
-            ASSERT_CLOSE((dp[i] - dm[i]) / (2 * h), qdd[i], 1e-5 * (1 + fabs(qdd[i])), "qdd vs dqd/dt");
-            ASSERT_CLOSE((ap[i] - am[i]) / (2 * h), j[i], 1e-4 * (1 + fabs(j[i])), "jerk vs dqdd/dt");
+            ASSERT_CLOSE((dp[i] - dm[i]) / (2 * h), qdd[i], 1e-5 * (1 + fabs(qdd[i])),
+                         "qdd vs dqd/dt");
+            ASSERT_CLOSE((ap[i] - am[i]) / (2 * h), j[i], 1e-4 * (1 + fabs(j[i])),
+                         "jerk vs dqdd/dt");
         }
     }
 }
@@ -105,7 +107,8 @@ static void fades_start_and_end_at_rest_and_join_the_series(void **state) {
                     double w = kTwoPi * k * tr.base_frequency;
                     s += tr.rho[i][k - 1] * sin(w * ts) + tr.delta[i][k - 1] * cos(w * ts);
                     sd += w * (tr.rho[i][k - 1] * cos(w * ts) - tr.delta[i][k - 1] * sin(w * ts));
-                    sdd -= w * w * (tr.rho[i][k - 1] * sin(w * ts) + tr.delta[i][k - 1] * cos(w * ts));
+                    sdd -=
+                        w * w * (tr.rho[i][k - 1] * sin(w * ts) + tr.delta[i][k - 1] * cos(w * ts));
                 }
                 ASSERT_CLOSE(q[i], tr.q0[i] + s, 1e-7, "join: q");
                 ASSERT_CLOSE(qd[i], sd, 1e-6, "join: qd");
@@ -132,7 +135,8 @@ static void jerk_is_bounded_everywhere(void **state) {
     for (int i = 0; i < 6; ++i) {
         double smax[4] = {0, 0, 0, 0};
         for (int k = 1; k <= tr.harmonics; ++k) {
-            double w = kTwoPi * k * tr.base_frequency, c = fabs(tr.rho[i][k - 1]) + fabs(tr.delta[i][k - 1]);
+            double w = kTwoPi * k * tr.base_frequency,
+                   c = fabs(tr.rho[i][k - 1]) + fabs(tr.delta[i][k - 1]);
             for (int m = 0; m < 4; ++m) smax[m] += c * pow(w, m);
         }
         const double binom[4] = {1, 3, 3, 1};
@@ -211,7 +215,8 @@ static void assert_within_limits(const robot_t *r, const loadid_fourier_traj_t *
         }
         loadid_kin_state_t st;
         assert_int_equal(loadid_kin_eval(r->kin, rq, NULL, NULL, &st), 0);
-        for (int a = 0; a < 3; ++a) assert_true(st.position[a] >= L->ws_min[a] && st.position[a] <= L->ws_max[a]);
+        for (int a = 0; a < 3; ++a)
+            assert_true(st.position[a] >= L->ws_min[a] && st.position[a] <= L->ws_max[a]);
         assert_true(st.position[2] >= L->floor_z);
     }
 }
@@ -234,13 +239,17 @@ static void designer_lowers_kappa_within_the_limits(void **state) {
         template_of(&r, &tr);
         tr.harmonics = harmonics;
         tr.q0[1] = 0.3, tr.q0[2] = 1.2, tr.q0[4] = 0.8; /* arm bent, sensor forward */
-        loadid_traj_search_t s = {.monte_carlo = mc, .candidates = 2, .max_evals = evals,
-                                  .seed = seed, .optimise_home = seed == 3};
+        loadid_traj_search_t s = {.monte_carlo = mc,
+                                  .candidates = 2,
+                                  .max_evals = evals,
+                                  .seed = seed,
+                                  .optimise_home = seed == 3};
         loadid_traj_search_result_t res;
         assert_int_equal(loadid_traj_design(&r.p, &s, &tr, &res), 0);
-        print_message("seed %llu: kappa Monte Carlo %.4g -> optimised %.4g (%d feasible, %d evals)\n",
-                      (unsigned long long)seed, res.kappa_monte_carlo, res.kappa_optimised,
-                      res.feasible_candidates, res.evaluations);
+        print_message(
+            "seed %llu: kappa Monte Carlo %.4g -> optimised %.4g (%d feasible, %d evals)\n",
+            (unsigned long long)seed, res.kappa_monte_carlo, res.kappa_optimised,
+            res.feasible_candidates, res.evaluations);
         assert_true(res.kappa_optimised < 0.9 * res.kappa_monte_carlo);
         assert_true(fabs(loadid_traj_kappa(&r.p, &tr, r.p.objective_hz) - res.kappa_optimised) <=
                     1e-9 * res.kappa_optimised);
@@ -284,7 +293,8 @@ static void trajectory_file_round_trips_and_refuses_damage(void **state) {
     int fd = mkstemp(path);
     assert_true(fd >= 0);
     FILE *f = fdopen(fd, "w");
-    loadid_traj_file_info_t info = {"robot.urdf", "base_link", "ft_sensor", &r.chain, 2.5, 7.5, 9.5, 3};
+    loadid_traj_file_info_t info = {"robot.urdf", "base_link", "ft_sensor", &r.chain,
+                                    2.5,          7.5,         9.5,         3};
     assert_int_equal(loadid_traj_file_write(f, &tr, &r.p.limits, &info), 0);
     fclose(f);
     char names[LOADID_MAX_JOINTS][LOADID_NAME_MAX], err[512];

@@ -32,7 +32,11 @@ enum { kSeeds = 300 };
 #endif
 
 static const loadid_synth_noise_t kPaperNoise = {
-    .sigma_f = 0.1, .sigma_tau = 0.005, .sigma_spec = 0.5, .sigma_alpha = 5.0, .sigma_omega = 0.02,
+    .sigma_f = 0.1,
+    .sigma_tau = 0.005,
+    .sigma_spec = 0.5,
+    .sigma_alpha = 5.0,
+    .sigma_omega = 0.02,
     .offset = {1.0, -2.0, 0.5, 0.05, 0.02, -0.04},
 };
 
@@ -56,7 +60,8 @@ static void invert(double *M, int n, double *inv) {
         for (int r = 0; r < n; ++r) {
             if (r == c) continue;
             const double f = M[r * n + c];
-            for (int j = 0; j < n; ++j) M[r * n + j] -= f * M[c * n + j], inv[r * n + j] -= f * inv[c * n + j];
+            for (int j = 0; j < n; ++j)
+                M[r * n + j] -= f * M[c * n + j], inv[r * n + j] -= f * inv[c * n + j];
         }
     }
 }
@@ -94,7 +99,8 @@ static void test_ls_std_equals_normal_equations(void **state) {
                 double e = y[r];
                 for (int i = 0; i < 10; ++i) {
                     e -= A[r * 10 + i] * phi[i];
-                    for (int j = 0; j < 10; ++j) G[g][i * 10 + j] += w * A[r * 10 + i] * A[r * 10 + j];
+                    for (int j = 0; j < 10; ++j)
+                        G[g][i * 10 + j] += w * A[r * 10 + i] * A[r * 10 + j];
                 }
                 rss[g] += w * e * e;
             }
@@ -114,8 +120,10 @@ static void test_ls_std_equals_normal_equations(void **state) {
             worst = fmax(worst, fabs(std[i] - ref) / ref);
         }
         const double s2_pooled = (s2[0] + s2[1]) / 2;
-        print_message("%s: std against the normal equations: worst relative difference %.2e, "
-                      "scale %.3f\n", loadid_method_name(methods[mi]), worst, scale);
+        print_message(
+            "%s: std against the normal equations: worst relative difference %.2e, "
+            "scale %.3f\n",
+            loadid_method_name(methods[mi]), worst, scale);
         /* Both solve the same equations in double; RLS's prior 1/p0 adds
          * about 1e-9 of the information. */
         assert_true(worst < 1e-6);
@@ -131,14 +139,17 @@ static void coverage(loadid_method_t method, const loadid_synth_noise_t *noise, 
     int in[10] = {0};
     *mean_scale = 0;
     for (int seed = 1; seed <= kSeeds; ++seed) {
-        dataset_spec_t spec = {.seed = (uint64_t)seed * 7919u + 11u, .n_samples = 1500, .n_params = 10,
+        dataset_spec_t spec = {.seed = (uint64_t)seed * 7919u + 11u,
+                               .n_samples = 1500,
+                               .n_params = 10,
                                .noise = *noise};
         dataset_t d;
         assert_int_equal(dataset_make(&spec, &d), 0);
         loadid_est_config_t cfg;
         dataset_config(&spec, method, &cfg);
         if (noise->sigma_spec == 0)
-            for (int i = 0; i < 3; ++i) cfg.row_sigma[i] = noise->sigma_f, cfg.row_sigma[3 + i] = noise->sigma_tau;
+            for (int i = 0; i < 3; ++i)
+                cfg.row_sigma[i] = noise->sigma_f, cfg.row_sigma[3 + i] = noise->sigma_tau;
         loadid_real_t phi[10], std[10], scale;
         fit(&d, &cfg, phi, std, &scale);
         for (int j = 0; j < 10; ++j) in[j] += fabs(phi[j] - d.truth[j]) <= 2 * std[j];
@@ -154,10 +165,11 @@ static void check_coverage(loadid_method_t method, const loadid_synth_noise_t *n
     coverage(method, noise, c, &scale);
     double cmin = 1, cmax = 0;
     for (int j = 0; j < 10; ++j) cmin = fmin(cmin, c[j]), cmax = fmax(cmax, c[j]);
-    print_message("%-9s %d seeds: 2-sigma coverage per parameter %.2f %.2f %.2f %.2f %.2f %.2f "
-                  "%.2f %.2f %.2f %.2f (min %.2f, max %.2f), mean scale %.2f\n",
-                  loadid_method_name(method), kSeeds, c[0], c[1], c[2], c[3], c[4], c[5], c[6],
-                  c[7], c[8], c[9], cmin, cmax, scale);
+    print_message(
+        "%-9s %d seeds: 2-sigma coverage per parameter %.2f %.2f %.2f %.2f %.2f %.2f "
+        "%.2f %.2f %.2f %.2f (min %.2f, max %.2f), mean scale %.2f\n",
+        loadid_method_name(method), kSeeds, c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8],
+        c[9], cmin, cmax, scale);
 #ifndef LOADID_SANITIZED
     assert_true(cmin >= lo);
     assert_true(cmax <= hi);
@@ -215,8 +227,10 @@ static void test_still_pose_is_undetermined(void **state) {
             const double r = std[j] / fabs(d.truth[j]);
             ratio = j == 4 ? r : fmin(ratio, r);
         }
-        print_message("still pose, noisy accelerations: inertia std at least %.0f times the "
-                      "inertia\n", ratio);
+        print_message(
+            "still pose, noisy accelerations: inertia std at least %.0f times the "
+            "inertia\n",
+            ratio);
         assert_true(ratio > 10);
     } else {
         assert_int_equal(rc, LOADID_E_NOT_EXCITED); /* the gate refused it: also fine */

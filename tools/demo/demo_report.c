@@ -12,9 +12,9 @@
 #include "loadid/core.h"
 #include "loadid/signals.h"
 
-static const char *const kParams[10] = {"m", "m*cx", "m*cy", "m*cz", "Ixx",
-                                        "Ixy", "Ixz", "Iyy", "Iyz", "Izz"};
-static const char *const kUnits[10] = {"kg", "kg m", "kg m", "kg m", "kg m^2",
+static const char *const kParams[10] = {"m",   "m*cx", "m*cy", "m*cz", "Ixx",
+                                        "Ixy", "Ixz",  "Iyy",  "Iyz",  "Izz"};
+static const char *const kUnits[10] = {"kg",     "kg m",   "kg m",   "kg m",   "kg m^2",
                                        "kg m^2", "kg m^2", "kg m^2", "kg m^2", "kg m^2"};
 /* The study's usable estimate (loadid-study, time to a usable estimate). */
 static const double kUsableMassPct = 1.0, kUsableComMm = 2.0, kUsableInertiaPct = 15.0;
@@ -66,9 +66,9 @@ void demo_est_fill(demo_est_t *e, const loadid_pipeline_estimate_t *p, const dou
     loadid_physical_t pt;
     loadid_phi_to_physical(t, &pt);
     double d[6], it[6], dc = 0;
-    for (int i = 0; i < 6; ++i)
-        it[i] = (double)pt.inertia_com[i], d[i] = p->inertia_com[i] - it[i];
-    for (int i = 0; i < 3; ++i) dc += (p->com[i] - (double)pt.com[i]) * (p->com[i] - (double)pt.com[i]);
+    for (int i = 0; i < 6; ++i) it[i] = (double)pt.inertia_com[i], d[i] = p->inertia_com[i] - it[i];
+    for (int i = 0; i < 3; ++i)
+        dc += (p->com[i] - (double)pt.com[i]) * (p->com[i] - (double)pt.com[i]);
     e->mass_pct = 100.0 * fabs(p->mass - (double)pt.mass) / (double)pt.mass;
     e->com_mm = 1000.0 * sqrt(dc);
     e->inertia_pct = 100.0 * frob6(d) / frob6(it);
@@ -78,10 +78,10 @@ void demo_est_fill(demo_est_t *e, const loadid_pipeline_estimate_t *p, const dou
 
 /* The medians over the seeds of one source and method. */
 typedef struct {
-    int runs;                     /* with an estimate */
-    double err[10], mean;         /* eq. (37) per parameter, and their mean [%] */
+    int runs;             /* with an estimate */
+    double err[10], mean; /* eq. (37) per parameter, and their mean [%] */
     double mass_pct, com_mm, inertia_pct;
-    int usable;                   /* runs within the study's bounds */
+    int usable; /* runs within the study's bounds */
 } stats_t;
 
 static double run_mean(const demo_est_t *e) {
@@ -119,8 +119,10 @@ static stats_t stats_of(const demo_results_t *r, int k, int m) {
 
 /* A percentage with the digits it deserves. */
 static const char *pct(char *buf, size_t len, double x) {
-    if (isnan(x)) snprintf(buf, len, "-");
-    else snprintf(buf, len, x < 10 ? "%.2f" : x < 100 ? "%.1f" : "%.0f", x);
+    if (isnan(x))
+        snprintf(buf, len, "-");
+    else
+        snprintf(buf, len, x < 10 ? "%.2f" : x < 100 ? "%.1f" : "%.0f", x);
     return buf;
 }
 
@@ -202,7 +204,8 @@ static int params_better(const stats_t *a, const stats_t *b) {
 /* Runs in which a's mean error is below b's. */
 static int runs_better(const demo_results_t *r, int k, int a, int b) {
     int n = 0;
-    for (int j = 0; j < r->seeds; ++j) n += run_mean(&r->src[k].est[j][a]) < run_mean(&r->src[k].est[j][b]);
+    for (int j = 0; j < r->seeds; ++j)
+        n += run_mean(&r->src[k].est[j][a]) < run_mean(&r->src[k].est[j][b]);
     return n;
 }
 
@@ -286,22 +289,25 @@ void demo_print_verdicts(FILE *out, const demo_results_t *r, int k) {
                 const int joints = r->src[k].source == LOADID_SIGNALS_KF ||
                                    r->src[k].source == LOADID_SIGNALS_SETPOINT;
                 if (ahead > 5) {
-                    add(l, sizeof l, "RTLS better on %d/10 parameters (%d/%d runs), as in the paper",
-                        ahead, runs_better(r, k, rtls, m), r->seeds);
+                    add(l, sizeof l,
+                        "RTLS better on %d/10 parameters (%d/%d runs), as in the paper", ahead,
+                        runs_better(r, k, rtls, m), r->seeds);
                 } else {
                     better(l, sizeof l, r, k, st, m, rtls);
-                    add(l, sizeof l, behind > 5 ? ": %s %s RTLS, unlike the paper"
-                                                : ": %s and RTLS even%s",
-                        mname(r, m), behind > 5 ? (close_to(&st[m], &st[rtls]) ? "slightly ahead of"
-                                                                                : "BEAT")
-                                                : "");
+                    add(l, sizeof l,
+                        behind > 5 ? ": %s %s RTLS, unlike the paper" : ": %s and RTLS even%s",
+                        mname(r, m),
+                        behind > 5 ? (close_to(&st[m], &st[rtls]) ? "slightly ahead of" : "BEAT")
+                                   : "");
                 }
                 if (close_to(&st[m], &st[rtls]) && joints)
-                    add(l, sizeof l, " (mean errors within 10 %%: the joints' columns count as "
-                                     "exact, so TLS has little to correct)");
+                    add(l, sizeof l,
+                        " (mean errors within 10 %%: the joints' columns count as "
+                        "exact, so TLS has little to correct)");
                 else if (behind > 5 && m == riv && sensor)
-                    add(l, sizeof l, " (its instruments, the setpoints, are close to the simulated "
-                                     "motion and free of the accelerometer's noise)");
+                    add(l, sizeof l,
+                        " (its instruments, the setpoints, are close to the simulated "
+                        "motion and free of the accelerometer's noise)");
             }
         } else if (method == LOADID_METHOD_LS_BATCH || method == LOADID_METHOD_TLS_BATCH) {
             const int twin = method == LOADID_METHOD_LS_BATCH ? rls : rtls;
@@ -309,8 +315,9 @@ void demo_print_verdicts(FILE *out, const demo_results_t *r, int k) {
                 twin >= 0 ? mname(r, twin) : "-", pct(a, sizeof a, st[m].mean),
                 twin >= 0 ? pct(b, sizeof b, st[twin].mean) : "-");
         } else if (method == LOADID_METHOD_REFINED) {
-            add(l, sizeof l, "not in the paper: batch TLS on the joints smoothed without lag "
-                             "(whatever the source), mean error %s %% vs RTLS's %s %%",
+            add(l, sizeof l,
+                "not in the paper: batch TLS on the joints smoothed without lag "
+                "(whatever the source), mean error %s %% vs RTLS's %s %%",
                 pct(a, sizeof a, st[m].mean), rtls >= 0 ? pct(b, sizeof b, st[rtls].mean) : "-");
         }
         fprintf(out, "   %-9s %s\n", mname(r, m), l);
@@ -322,8 +329,9 @@ int demo_write_runs(const char *dir, const demo_results_t *r) {
     snprintf(path, sizeof path, "%s/runs.csv", dir);
     FILE *f = fopen(path, "w");
     if (!f) return -errno;
-    fprintf(f, "signals,seed,method,valid,samples,condition_number,sigma_min,"
-               "physically_consistent,mass_pct,com_mm,inertia_pct");
+    fprintf(f,
+            "signals,seed,method,valid,samples,condition_number,sigma_min,"
+            "physically_consistent,mass_pct,com_mm,inertia_pct");
     for (int i = 0; i < 10; ++i) fprintf(f, ",phi%d", i);
     for (int i = 0; i < 10; ++i) fprintf(f, ",err%d", i);
     for (int i = 0; i < 10; ++i) fprintf(f, ",truth%d", i);

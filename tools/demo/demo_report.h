@@ -20,24 +20,24 @@
 /* One method's final estimate of one run, with its errors. */
 typedef struct {
     int valid;
-    char why[160];                /* when !valid */
+    char why[160]; /* when !valid */
     int64_t samples;
-    double phi[10];               /* the load (distal part removed) */
-    double err[10];               /* eq. (37): |x - x_true| / |x_true| [%] */
-    double mass_pct;              /* |m - m_true| / m_true [%] */
-    double com_mm;                /* |c - c_true| [mm] */
-    double inertia_pct;           /* ||I_C - I_C,true||_F / ||I_C,true||_F [%] */
-    double condition_number;      /* dimensionless */
-    double sigma_min;             /* TLS methods, dimensionless (noise-weighted) */
+    double phi[10];          /* the load (distal part removed) */
+    double err[10];          /* eq. (37): |x - x_true| / |x_true| [%] */
+    double mass_pct;         /* |m - m_true| / m_true [%] */
+    double com_mm;           /* |c - c_true| [mm] */
+    double inertia_pct;      /* ||I_C - I_C,true||_F / ||I_C,true||_F [%] */
+    double condition_number; /* dimensionless */
+    double sigma_min;        /* TLS methods, dimensionless (noise-weighted) */
     int consistent;
 } demo_est_t;
 
 /* One signal source's runs. */
 typedef struct {
-    int source;                   /* loadid_signal_source_t */
+    int source; /* loadid_signal_source_t */
     const char *name;
     demo_est_t est[DEMO_MAX_SEEDS][DEMO_METHODS];
-    double window_wall_s[DEMO_MAX_SEEDS];   /* START to DONE */
+    double window_wall_s[DEMO_MAX_SEEDS]; /* START to DONE */
     double window_cpu_s[DEMO_MAX_SEEDS];
     double run_wall_s[DEMO_MAX_SEEDS];      /* the whole recording, files read */
     int64_t window_samples[DEMO_MAX_SEEDS]; /* samples estimated */
@@ -46,7 +46,7 @@ typedef struct {
 } demo_source_t;
 
 typedef struct {
-    int methods[DEMO_METHODS];    /* loadid_method_t, in the table's order */
+    int methods[DEMO_METHODS]; /* loadid_method_t, in the table's order */
     double truth[10];
     uint64_t first_seed;
     int seeds;

@@ -53,8 +53,8 @@ static void warn_line(void *ctx, const char *msg) {
 }
 
 /* Every method, in the order of the paper's comparison first. */
-static const int kMethods[DEMO_METHODS] = {LOADID_METHOD_RLS, LOADID_METHOD_RIV,
-                                           LOADID_METHOD_RTLS, LOADID_METHOD_LS_BATCH,
+static const int kMethods[DEMO_METHODS] = {LOADID_METHOD_RLS,       LOADID_METHOD_RIV,
+                                           LOADID_METHOD_RTLS,      LOADID_METHOD_LS_BATCH,
                                            LOADID_METHOD_TLS_BATCH, LOADID_METHOD_REFINED};
 
 /* A distal sensor part: a 0.2 kg disc, 8 mm thick, r = 40 mm, centred
@@ -63,7 +63,7 @@ static void distal_phi(double phi[10]) {
     const double m = 0.2, r = 0.04, h = 0.008;
     const double ixx = m * (3 * r * r + h * h) / 12.0, izz = m * r * r / 2.0;
     loadid_real_t p[10], c[3] = {0, 0, 0.004}, ic[6] = {(loadid_real_t)ixx, 0, 0,
-                                                       (loadid_real_t)ixx, 0, (loadid_real_t)izz};
+                                                        (loadid_real_t)ixx, 0, (loadid_real_t)izz};
     loadid_phi_from_physical((loadid_real_t)m, c, ic, p);
     for (int i = 0; i < 10; ++i) phi[i] = (double)p[i];
 }
@@ -169,8 +169,12 @@ static int design(const loadid_config_t *cfg, const loadid_chain_t *chain, uint6
         const double lo = chain->joints[i].lower, hi = chain->joints[i].upper;
         tr->q0[i] = isfinite(hi - lo) ? (lo + hi) / 2 : 0;
     }
-    loadid_traj_search_t s = {.monte_carlo = 600, .candidates = 2, .max_evals = 2000,
-                              .seed = seed, .optimise_home = 1, .progress = progress};
+    loadid_traj_search_t s = {.monte_carlo = 600,
+                              .candidates = 2,
+                              .max_evals = 2000,
+                              .seed = seed,
+                              .optimise_home = 1,
+                              .progress = progress};
     loadid_traj_search_result_t res;
     int rc = loadid_traj_design(&p, &s, tr, &res);
     if (rc == 0) *kappa = loadid_traj_kappa(&p, tr, 1000);
@@ -180,7 +184,7 @@ static int design(const loadid_config_t *cfg, const loadid_chain_t *chain, uint6
 
 /* One estimation run's sinks: the window's times, and the trace. */
 typedef struct {
-    loadid_trace_csv_t *trace;    /* NULL: none */
+    loadid_trace_csv_t *trace; /* NULL: none */
     double wall0, cpu0, wall, cpu;
 } run_ctx_t;
 
@@ -211,8 +215,8 @@ static int estimate(const loadid_config_t *cfg, const loadid_chain_t *chain, con
         if (loadid_trace_csv_open(&trace, trace_path, err, errlen) != 0) return -1;
         ctx.trace = &trace;
     }
-    loadid_pipeline_sink_t sink = {.ctx = &ctx, .state = on_state,
-                                   .estimate = trace_path ? on_estimate : NULL};
+    loadid_pipeline_sink_t sink = {
+        .ctx = &ctx, .state = on_state, .estimate = trace_path ? on_estimate : NULL};
     loadid_pipeline_t *p = NULL;
     loadid_offline_report_t rep;
     const double t0 = now_s(CLOCK_MONOTONIC);
@@ -235,7 +239,8 @@ static int estimate(const loadid_config_t *cfg, const loadid_chain_t *chain, con
             s->run_samples[j] = st.samples_ok;
             loadid_pipeline_estimate_t est[LOADID_MAX_METHODS];
             const int n = loadid_pipeline_estimates(p, est, LOADID_MAX_METHODS);
-            for (int m = 0; m < n && m < DEMO_METHODS; ++m) demo_est_fill(&s->est[j][m], &est[m], truth);
+            for (int m = 0; m < n && m < DEMO_METHODS; ++m)
+                demo_est_fill(&s->est[j][m], &est[m], truth);
         }
     }
     loadid_pipeline_destroy(p);
@@ -255,8 +260,9 @@ static int write_config(const char *dir, const loadid_config_t *cfg, const char 
     snprintf(path, sizeof path, "%s/loadid-%s.yaml", dir, source);
     FILE *f = fopen(path, "w");
     if (!f) return -errno;
-    fprintf(f, "# loadid-demo's configuration for signals %s: the keys below, the rest at their\n"
-               "# defaults (host/config/loadid.yaml).\nestimation:\n  methods: [",
+    fprintf(f,
+            "# loadid-demo's configuration for signals %s: the keys below, the rest at their\n"
+            "# defaults (host/config/loadid.yaml).\nestimation:\n  methods: [",
             source);
     for (int m = 0; m < DEMO_METHODS; ++m)
         fprintf(f, "%s%s", m ? ", " : "", loadid_method_name((loadid_method_t)kMethods[m]));
@@ -311,7 +317,8 @@ static int parse_sources(const char *list, demo_results_t *r) {
     r->num_sources = 0;
     for (char *save = NULL, *t = strtok_r(buf, ",", &save); t; t = strtok_r(NULL, ",", &save)) {
         loadid_signal_source_t src;
-        if (loadid_signal_source_parse(t, &src) != 0 || r->num_sources == DEMO_MAX_SOURCES) return -1;
+        if (loadid_signal_source_parse(t, &src) != 0 || r->num_sources == DEMO_MAX_SOURCES)
+            return -1;
         for (int k = 0; k < r->num_sources; ++k)
             if (r->src[k].source == (int)src) return -1;
         r->src[r->num_sources].source = src;
@@ -322,11 +329,16 @@ static int parse_sources(const char *list, demo_results_t *r) {
 
 static const char *source_story(int src) {
     switch (src) {
-        case LOADID_SIGNALS_SENSOR: return "the paper's Fig. 6: a - g and alpha from the JR3's accelerometer";
-        case LOADID_SIGNALS_MIXED: return "the paper's Fig. 7: a - g from the JR3, alpha from the joints";
-        case LOADID_SIGNALS_KF: return "the service's default: a - g, omega, alpha from the joint encoders";
-        case LOADID_SIGNALS_SETPOINT: return "from the commanded joint setpoints";
-        default: return "";
+        case LOADID_SIGNALS_SENSOR:
+            return "the paper's Fig. 6: a - g and alpha from the JR3's accelerometer";
+        case LOADID_SIGNALS_MIXED:
+            return "the paper's Fig. 7: a - g from the JR3, alpha from the joints";
+        case LOADID_SIGNALS_KF:
+            return "the service's default: a - g, omega, alpha from the joint encoders";
+        case LOADID_SIGNALS_SETPOINT:
+            return "from the commanded joint setpoints";
+        default:
+            return "";
     }
 }
 
@@ -336,28 +348,43 @@ int main(int argc, char **argv) {
     const char *keep = NULL, *offset_model = "zeroing", *signals = "sensor,kf", *out = NULL;
     int force = 0, plots = 1;
     static const struct option opts[] = {
-        {"help", no_argument, NULL, 'h'},       {"offset-model", required_argument, NULL, 'o'},
-        {"seed", required_argument, NULL, 's'}, {"signals", required_argument, NULL, 'g'},
-        {"keep", required_argument, NULL, 'k'}, {"force", no_argument, NULL, 'f'},
+        {"help", no_argument, NULL, 'h'},        {"offset-model", required_argument, NULL, 'o'},
+        {"seed", required_argument, NULL, 's'},  {"signals", required_argument, NULL, 'g'},
+        {"keep", required_argument, NULL, 'k'},  {"force", no_argument, NULL, 'f'},
         {"seeds", required_argument, NULL, 'n'}, {"out", required_argument, NULL, 'O'},
-        {"no-plots", no_argument, NULL, 'P'},   {NULL, 0, NULL, 0},
+        {"no-plots", no_argument, NULL, 'P'},    {NULL, 0, NULL, 0},
     };
     int c;
     while ((c = getopt_long(argc, argv, "ho:s:g:k:", opts, NULL)) != -1) {
         char *end = NULL;
         switch (c) {
-            case 'h': usage(stdout); return 0;
-            case 'o': offset_model = optarg; break;
-            case 'g': signals = optarg; break;
-            case 'k': keep = optarg; break;
-            case 'f': force = 1; break;
-            case 'O': out = optarg; break;
-            case 'P': plots = 0; break;
+            case 'h':
+                usage(stdout);
+                return 0;
+            case 'o':
+                offset_model = optarg;
+                break;
+            case 'g':
+                signals = optarg;
+                break;
+            case 'k':
+                keep = optarg;
+                break;
+            case 'f':
+                force = 1;
+                break;
+            case 'O':
+                out = optarg;
+                break;
+            case 'P':
+                plots = 0;
+                break;
             case 's':
                 errno = 0;
                 seed = strtoull(optarg, &end, 10);
                 if (errno || !end || *end) {
-                    fprintf(stderr, "%s: --seed must be an unsigned integer, not '%s'\n", prog, optarg);
+                    fprintf(stderr, "%s: --seed must be an unsigned integer, not '%s'\n", prog,
+                            optarg);
                     return 2;
                 }
                 break;
@@ -370,7 +397,9 @@ int main(int argc, char **argv) {
                     return 2;
                 }
                 break;
-            default: usage(stderr); return 2;
+            default:
+                usage(stderr);
+                return 2;
         }
     }
     if (optind != argc) {
@@ -393,8 +422,10 @@ int main(int argc, char **argv) {
     static demo_results_t res;
     if (parse_sources(signals, &res) != 0 ||
         (strcmp(offset_model, "zeroing") && strcmp(offset_model, "estimate"))) {
-        fprintf(stderr, "%s: --signals is a list of sensor, kf, setpoint, mixed (each once), "
-                        "--offset-model zeroing|estimate\n", prog);
+        fprintf(stderr,
+                "%s: --signals is a list of sensor, kf, setpoint, mixed (each once), "
+                "--offset-model zeroing|estimate\n",
+                prog);
         return 2;
     }
     char rec_keep[PATH_MAX] = "";
@@ -410,8 +441,7 @@ int main(int argc, char **argv) {
     static loadid_config_t cfg;
     loadid_chain_t chain;
     char setup_err[1200];
-    if (loadid_setup_load(NULL, &cfg, &chain, warn_line, NULL, setup_err,
-                          sizeof setup_err) != 0) {
+    if (loadid_setup_load(NULL, &cfg, &chain, warn_line, NULL, setup_err, sizeof setup_err) != 0) {
         fprintf(stderr, "%s: %s\n", prog, setup_err);
         return 1;
     }
@@ -428,14 +458,15 @@ int main(int argc, char **argv) {
     for (int i = 0; i < 10; ++i) truth_r[i] = (loadid_real_t)res.truth[i];
     loadid_physical_t tp;
     loadid_phi_to_physical(truth_r, &tp);
-    printf("loadid demo: Kubus, Kroeger & Wahl (IROS 2008) sec. V in simulation: the paper's load "
-           "o1 (%.3g kg, COM [%.1f %.1f %.1f] mm) with a 0.2 kg distal sensor part, on a simulated "
-           "Staeubli RX60; core in %s\n\n"
-           "1. Excitation trajectory (paper sec. III): %d harmonics of %.2g Hz, %.2g s active, "
-           "search seed %llu\n",
-           (double)tp.mass, 1e3 * tp.com[0], 1e3 * tp.com[1], 1e3 * tp.com[2],
-           loadid_scalar_is_float() ? "float" : "double", cfg.traj_harmonics,
-           cfg.traj_base_frequency, cfg.traj_active_s, seed);
+    printf(
+        "loadid demo: Kubus, Kroeger & Wahl (IROS 2008) sec. V in simulation: the paper's load "
+        "o1 (%.3g kg, COM [%.1f %.1f %.1f] mm) with a 0.2 kg distal sensor part, on a simulated "
+        "Staeubli RX60; core in %s\n\n"
+        "1. Excitation trajectory (paper sec. III): %d harmonics of %.2g Hz, %.2g s active, "
+        "search seed %llu\n",
+        (double)tp.mass, 1e3 * tp.com[0], 1e3 * tp.com[1], 1e3 * tp.com[2],
+        loadid_scalar_is_float() ? "float" : "double", cfg.traj_harmonics, cfg.traj_base_frequency,
+        cfg.traj_active_s, seed);
     fflush(stdout);
     const double began = now_s(CLOCK_MONOTONIC);
     loadid_fourier_traj_t tr;
@@ -444,9 +475,10 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s: no trajectory within the limits was found\n", prog);
         return 1;
     }
-    printf("   kappa_design %.4g (dimensionless: the condition number of the noise-weighted data "
-           "matrix D A T of the setpoints at 1 kHz; 1 is ideal), in %.1f s\n",
-           kappa, now_s(CLOCK_MONOTONIC) - began);
+    printf(
+        "   kappa_design %.4g (dimensionless: the condition number of the noise-weighted data "
+        "matrix D A T of the setpoints at 1 kHz; 1 is ideal), in %.1f s\n",
+        kappa, now_s(CLOCK_MONOTONIC) - began);
 
     /* 2 and 3: simulate each seed, estimate it with every source. */
     const double sim0 = now_s(CLOCK_MONOTONIC);
@@ -463,11 +495,16 @@ int main(int argc, char **argv) {
             fprintf(stderr, "%s: cannot make a temporary folder: %s\n", prog, strerror(errno));
             return 1;
         }
-        loadid_sim_options_t opt = {.cfg = &cfg, .chain = &chain, .traj = &tr,
+        loadid_sim_options_t opt = {.cfg = &cfg,
+                                    .chain = &chain,
+                                    .traj = &tr,
                                     .kappa_design = kappa,
-                                    .traj_path = "(designed by loadid-demo)", .out_dir = dir,
-                                    .load_name = "o1", .seed = sd,
-                                    .start_utime = 1700000000000000LL, .warn = warn_line};
+                                    .traj_path = "(designed by loadid-demo)",
+                                    .out_dir = dir,
+                                    .load_name = "o1",
+                                    .seed = sd,
+                                    .start_utime = 1700000000000000LL,
+                                    .warn = warn_line};
         loadid_damage_init(&opt.damage, sd);
         const double s0 = now_s(CLOCK_MONOTONIC);
         rc = loadid_sim_run(&opt, &sum, err, sizeof err);
@@ -496,60 +533,68 @@ int main(int argc, char **argv) {
         return 1;
     }
     const double est_s = now_s(CLOCK_MONOTONIC) - sim0 - sim_s;
-    printf("\n2. Simulated recordings, seeds %llu to %llu (the same trajectory; the noise, "
-           "vibration and backlash draws differ), in %.1f s: each %lld JR3 samples and joint "
-           "states at 1 kHz over %.2f s (still, ZERO, START, the 1.5 s window, still); noise "
-           "(1 sigma) f %.3g N, tau %.3g N m, a - g %.3g m/s^2, alpha %.3g rad/s^2; servo %.3g "
-           "Hz, backlash %.3g mrad, 2^20-count encoders%s%s\n",
-           seed, seed + (unsigned long long)res.seeds - 1, sim_s, (long long)sum.samples,
-           sum.duration_s, cfg.sim_noise_force, cfg.sim_noise_torque, cfg.sim_noise_linear,
-           cfg.sim_noise_angular, cfg.sim_servo_bandwidth_hz, 1e3 * cfg.sim_backlash,
-           rec_keep[0] ? "; the first kept in " : "", rec_keep);
-    printf("\n3. Estimation by the service's pipeline (as loadidd --offline; %s): RLS, RIV and "
-           "RTLS on line, LS_BATCH, TLS_BATCH and REFINED at the window's end; %d runs in %.2f s "
-           "wall\n",
-           cfg.offset_model_estimate ? "the offset estimated, 16 parameters" : "zeroing, eqs. 7-9",
-           res.seeds * res.num_sources, est_s);
+    printf(
+        "\n2. Simulated recordings, seeds %llu to %llu (the same trajectory; the noise, "
+        "vibration and backlash draws differ), in %.1f s: each %lld JR3 samples and joint "
+        "states at 1 kHz over %.2f s (still, ZERO, START, the 1.5 s window, still); noise "
+        "(1 sigma) f %.3g N, tau %.3g N m, a - g %.3g m/s^2, alpha %.3g rad/s^2; servo %.3g "
+        "Hz, backlash %.3g mrad, 2^20-count encoders%s%s\n",
+        seed, seed + (unsigned long long)res.seeds - 1, sim_s, (long long)sum.samples,
+        sum.duration_s, cfg.sim_noise_force, cfg.sim_noise_torque, cfg.sim_noise_linear,
+        cfg.sim_noise_angular, cfg.sim_servo_bandwidth_hz, 1e3 * cfg.sim_backlash,
+        rec_keep[0] ? "; the first kept in " : "", rec_keep);
+    printf(
+        "\n3. Estimation by the service's pipeline (as loadidd --offline; %s): RLS, RIV and "
+        "RTLS on line, LS_BATCH, TLS_BATCH and REFINED at the window's end; %d runs in %.2f s "
+        "wall\n",
+        cfg.offset_model_estimate ? "the offset estimated, 16 parameters" : "zeroing, eqs. 7-9",
+        res.seeds * res.num_sources, est_s);
     demo_print_timing(stdout, &res);
     const demo_est_t *rt = &res.src[0].est[0][2];
     if (rt->valid)
-        printf("   %s, seed %llu, RTLS: condition_number %.3g (dimensionless, of the weighted data "
-               "D A T), sigma_min %.4g (dimensionless: the noise-weighted misfit; %.2f times "
-               "sqrt(6 x %lld), what the noise levels explain)\n",
-               res.src[0].name, seed, rt->condition_number, rt->sigma_min,
-               rt->sigma_min / sqrt(6.0 * (double)rt->samples), (long long)rt->samples);
+        printf(
+            "   %s, seed %llu, RTLS: condition_number %.3g (dimensionless, of the weighted data "
+            "D A T), sigma_min %.4g (dimensionless: the noise-weighted misfit; %.2f times "
+            "sqrt(6 x %lld), what the noise levels explain)\n",
+            res.src[0].name, seed, rt->condition_number, rt->sigma_min,
+            rt->sigma_min / sqrt(6.0 * (double)rt->samples), (long long)rt->samples);
 
     for (int k = 0; k < res.num_sources; ++k) {
-        printf("\n%d. Signals %s (%s): eq. (37) error |estimate - truth| / |truth| [%%], median "
-               "over the %d seeds\n",
-               4 + k, res.src[k].name, source_story(res.src[k].source), res.seeds);
+        printf(
+            "\n%d. Signals %s (%s): eq. (37) error |estimate - truth| / |truth| [%%], median "
+            "over the %d seeds\n",
+            4 + k, res.src[k].name, source_story(res.src[k].source), res.seeds);
         demo_print_table(stdout, &res, k);
-        printf("   Verdicts against the truth (medians over the seeds; usable: within 1 %% of the "
-               "mass, 2 mm of the COM and 15 %% of the inertia about the COM) and against the paper "
-               "(\"better on p/10 parameters (q/N runs)\": a lower median error on p parameters, a "
-               "lower mean of the ten in q runs):\n");
+        printf(
+            "   Verdicts against the truth (medians over the seeds; usable: within 1 %% of the "
+            "mass, 2 mm of the COM and 15 %% of the inertia about the COM) and against the paper "
+            "(\"better on p/10 parameters (q/N runs)\": a lower median error on p parameters, a "
+            "lower mean of the ten in q runs):\n");
         demo_print_verdicts(stdout, &res, k);
     }
     if (!out) {
         printf("\nNo plots without --out DIR (bash tools/setup.sh demo writes build/demo).\n");
         return 0;
     }
-    for (int k = 0; k < res.num_sources && rc == 0; ++k) rc = write_config(out, &cfg, res.src[k].name);
+    for (int k = 0; k < res.num_sources && rc == 0; ++k)
+        rc = write_config(out, &cfg, res.src[k].name);
     if (rc == 0) rc = demo_write_runs(out, &res);
     if (rc != 0) {
         fprintf(stderr, "%s: cannot write into %s: %s\n", prog, out, strerror(-rc));
         return 1;
     }
-    printf("\nWritten to %s: runs.csv (every run's estimate and errors), trace-SOURCE.csv (seed "
-           "%llu's estimates over the window), recording/ with truth.yaml, loadid-SOURCE.yaml (the "
-           "configuration of each source: loadid plot --config %s/loadid-%s.yaml %s)\n",
-           out, seed, out, res.src[0].name, rec_keep);
+    printf(
+        "\nWritten to %s: runs.csv (every run's estimate and errors), trace-SOURCE.csv (seed "
+        "%llu's estimates over the window), recording/ with truth.yaml, loadid-SOURCE.yaml (the "
+        "configuration of each source: loadid plot --config %s/loadid-%s.yaml %s)\n",
+        out, seed, out, res.src[0].name, rec_keep);
     if (!plots) return 0;
     printf("\nPlots (loadid plot %s):\n", out);
     const int prc = draw_plots(out);
     if (prc != 0)
-        printf("   not drawn: loadid plot %s (its message above; it needs Python with "
-               "matplotlib: bash tools/setup.sh deps)\n",
-               prc < 0 ? "was not found beside loadid-demo" : "failed");
+        printf(
+            "   not drawn: loadid plot %s (its message above; it needs Python with "
+            "matplotlib: bash tools/setup.sh deps)\n",
+            prc < 0 ? "was not found beside loadid-demo" : "failed");
     return 0;
 }

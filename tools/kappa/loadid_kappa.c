@@ -52,7 +52,7 @@ typedef struct {
     loadid_real_t g_init[3];
     int64_t zero_us, start_us, end_us;
     int64_t samples, refused;
-    int64_t bad_messages;             /* joint states and commands not decodable */
+    int64_t bad_messages; /* joint states and commands not decodable */
     char load_name[128];
 } kappa_run_t;
 
@@ -87,7 +87,8 @@ static void on_joints(kappa_run_t *k, const loadid_rec_event_t *ev) {
     loadid_real_t pos[LOADID_MAX_JOINTS], set[LOADID_MAX_JOINTS];
     const int n = msg.num_joints;
     if (n >= 1 && n <= LOADID_MAX_JOINTS) {
-        for (int i = 0; i < n; ++i) pos[i] = (loadid_real_t)msg.position[i], set[i] = (loadid_real_t)msg.setpoint[i];
+        for (int i = 0; i < n; ++i)
+            pos[i] = (loadid_real_t)msg.position[i], set[i] = (loadid_real_t)msg.setpoint[i];
         loadid_signals_push_joints(k->sig, msg.utime, n, pos, set); /* bad ones are counted there */
     }
 }
@@ -127,9 +128,12 @@ static void on_sample(kappa_run_t *k, const loadid_jr3_sample_t *smp) {
     }
     const loadid_real_t y[6] = {0, 0, 0, 0, 0, 0};
     loadid_real_t A[6 * 16];
-    if (data_matrix(k, set.spec, set.omega, set.alpha, A) == 0) loadid_est_update(k->est[KAPPA_SET], A, NULL, y);
-    if (data_matrix(k, lin, kf.omega, ang, A) == 0) loadid_est_update(k->est[KAPPA_SENS], A, NULL, y);
-    if (data_matrix(k, kf.spec, kf.omega, kf.alpha, A) == 0) loadid_est_update(k->est[KAPPA_KF], A, NULL, y);
+    if (data_matrix(k, set.spec, set.omega, set.alpha, A) == 0)
+        loadid_est_update(k->est[KAPPA_SET], A, NULL, y);
+    if (data_matrix(k, lin, kf.omega, ang, A) == 0)
+        loadid_est_update(k->est[KAPPA_SENS], A, NULL, y);
+    if (data_matrix(k, kf.spec, kf.omega, kf.alpha, A) == 0)
+        loadid_est_update(k->est[KAPPA_KF], A, NULL, y);
     k->samples++;
 }
 
@@ -217,10 +221,17 @@ int main(int argc, char **argv) {
                                          {NULL, 0, NULL, 0}};
     int c;
     while ((c = getopt_long(argc, argv, "c:h", opts, NULL)) != -1) {
-        if (c == 'c') config_path = optarg;
-        else if (c == 'w') weighted = 1;
-        else if (c == 'h') { usage(stdout); return 0; }
-        else { usage(stderr); return 2; }
+        if (c == 'c')
+            config_path = optarg;
+        else if (c == 'w')
+            weighted = 1;
+        else if (c == 'h') {
+            usage(stdout);
+            return 0;
+        } else {
+            usage(stderr);
+            return 2;
+        }
     }
     if (optind == argc) {
         usage(stderr);

@@ -46,10 +46,13 @@
 #include "loadid/modbus_ft_server.h"
 
 static volatile sig_atomic_t g_stop;
-static void on_signal(int sig) { (void)sig; g_stop = 1; }
+static void on_signal(int sig) {
+    (void)sig;
+    g_stop = 1;
+}
 
 typedef struct {
-    int64_t t_us;          /* relative to the first sample */
+    int64_t t_us; /* relative to the first sample */
     double force[3], torque[3];
     bool saturated, faulty;
 } rec_sample_t;
@@ -58,10 +61,10 @@ typedef struct {
     rec_sample_t *s;
     size_t n;
     double fs_force[3], fs_moment[3];
-    int64_t start_ns;      /* CLOCK_MONOTONIC at the first sample */
+    int64_t start_ns; /* CLOCK_MONOTONIC at the first sample */
     bool loop;
-    bool constant;         /* --wrench: one sample, measured again per read */
-    bool start_on_read;    /* --start-on-read: the timeline starts at the first read */
+    bool constant;      /* --wrench: one sample, measured again per read */
+    bool start_on_read; /* --start-on-read: the timeline starts at the first read */
     bool started;
     bool ended;
     int64_t served;
@@ -71,24 +74,23 @@ typedef struct {
     int64_t first_read_us;                      /* wall time of the first sample read */
 } sim_t;
 
-static int64_t wall_us(void)
-{
+static int64_t wall_us(void) {
     struct timespec ts;
     clock_gettime(CLOCK_REALTIME, &ts);
     return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
 }
 
-static bool within(const double w[2], double t) { return w[1] > w[0] && t >= w[0] && t < w[1]; }
+static bool within(const double w[2], double t) {
+    return w[1] > w[0] && t >= w[0] && t < w[1];
+}
 
-static int64_t mono_ns(void)
-{
+static int64_t mono_ns(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
-static int load_recording(const char *dir, const loadid_config_t *cfg, sim_t *sim)
-{
+static int load_recording(const char *dir, const loadid_config_t *cfg, sim_t *sim) {
     char path[LOADID_PATH_MAX + 16];
     snprintf(path, sizeof path, "%s/can.log", dir);
     FILE *fp = fopen(path, "r");
@@ -151,8 +153,7 @@ static int load_recording(const char *dir, const loadid_config_t *cfg, sim_t *si
 }
 
 /* Before each input read: the newest sample whose time has come. */
-static void hook(void *ctx, loadid_modbus_ft_server_t *srv)
-{
+static void hook(void *ctx, loadid_modbus_ft_server_t *srv) {
     sim_t *sim = ctx;
     if (sim->start_on_read && !sim->started) {
         sim->start_ns = mono_ns();
@@ -162,7 +163,7 @@ static void hook(void *ctx, loadid_modbus_ft_server_t *srv)
     if (!sim->first_read_us) sim->first_read_us = wall_us();
     const int mode = within(sim->silent, (double)dt_us * 1e-6)    ? LOADID_MODBUS_FT_SERVER_SILENT
                      : within(sim->bad_crc, (double)dt_us * 1e-6) ? LOADID_MODBUS_FT_SERVER_BAD_CRC
-                                                                 : LOADID_MODBUS_FT_SERVER_NORMAL;
+                                                                  : LOADID_MODBUS_FT_SERVER_NORMAL;
     loadid_modbus_ft_server_set_mode(srv, mode);
     const int64_t span = sim->s[sim->n - 1].t_us + 1;
     int64_t rel = dt_us, lap = 0;
@@ -178,11 +179,15 @@ static void hook(void *ctx, loadid_modbus_ft_server_t *srv)
     size_t lo = 0, hi = sim->n;
     while (hi - lo > 1) {
         const size_t mid = (lo + hi) / 2;
-        if (sim->s[mid].t_us <= rel) lo = mid; else hi = mid;
+        if (sim->s[mid].t_us <= rel)
+            lo = mid;
+        else
+            hi = mid;
     }
     const rec_sample_t *s = &sim->s[lo];
     uint16_t regs[LOADID_MODBUS_FT_INPUT_COUNT];
-    const int64_t number = sim->constant ? sim->served + 1 : lap * (int64_t)sim->n + (int64_t)lo + 1;
+    const int64_t number =
+        sim->constant ? sim->served + 1 : lap * (int64_t)sim->n + (int64_t)lo + 1;
     const uint16_t counter = (uint16_t)((uint64_t)number & 0xFFFFu);
     loadid_modbus_ft_encode(sim->fs_force, sim->fs_moment, s->force, s->torque, s->faulty, counter,
                             regs);
@@ -197,8 +202,7 @@ static void hook(void *ctx, loadid_modbus_ft_server_t *srv)
 }
 
 /* --silent / --bad-crc T0:T1 [s], T0 < T1. */
-static int parse_window(const char *arg, double w[2])
-{
+static int parse_window(const char *arg, double w[2]) {
     char *end;
     w[0] = strtod(arg, &end);
     if (end == arg || *end != ':') return -1;
@@ -207,8 +211,7 @@ static int parse_window(const char *arg, double w[2])
     return end == arg || *end || !isfinite(w[0]) || !isfinite(w[1]) || !(w[1] > w[0]) ? -1 : 0;
 }
 
-static int parse_list(const char *arg, double *v, int n)
-{
+static int parse_list(const char *arg, double *v, int n) {
     char *end;
     for (int i = 0; i < n; ++i) {
         v[i] = strtod(arg, &end);
@@ -222,33 +225,32 @@ static int parse_list(const char *arg, double *v, int n)
     return *arg ? -1 : 0;
 }
 
-static void usage(FILE *f)
-{
-    fprintf(f,
-            "usage: loadid-modbus-sim [--wrench FX,FY,FZ,TX,TY,TZ | --recording DIR] [--config FILE]\n"
-            "                         [--link PATH] [--slave ID] [--full-scale FN,TNM] [--loop]\n"
-            "                         [--duration S] [--start-on-read | --epoch UTIME]\n"
-            "                         [--silent T0:T1] [--bad-crc T0:T1]\n"
-            "Serves the Modbus F/T register map (proto/modbus_ft.md) on a new pty and prints\n"
-            "its slave path. --wrench default 0,0,9.81,0,0,0 [N, N m]; --full-scale default\n"
-            "modbus.full_scale of --config (200 N, 12 N m). The recording's timeline starts\n"
-            "now, or with --start-on-read at the first sample read, or at --epoch (the wall\n"
-            "time in microseconds since the epoch of its first sample, so that a test can time\n"
-            "its joint states to it); --loop repeats it. --silent and --bad-crc leave the sample\n"
-            "reads in [T0, T1) s of that timeline unanswered or answer them with a wrong CRC.\n"
-            "At exit stderr says what was answered (counters, the first sample read's time).\n");
+static void usage(FILE *f) {
+    fprintf(
+        f,
+        "usage: loadid-modbus-sim [--wrench FX,FY,FZ,TX,TY,TZ | --recording DIR] [--config FILE]\n"
+        "                         [--link PATH] [--slave ID] [--full-scale FN,TNM] [--loop]\n"
+        "                         [--duration S] [--start-on-read | --epoch UTIME]\n"
+        "                         [--silent T0:T1] [--bad-crc T0:T1]\n"
+        "Serves the Modbus F/T register map (proto/modbus_ft.md) on a new pty and prints\n"
+        "its slave path. --wrench default 0,0,9.81,0,0,0 [N, N m]; --full-scale default\n"
+        "modbus.full_scale of --config (200 N, 12 N m). The recording's timeline starts\n"
+        "now, or with --start-on-read at the first sample read, or at --epoch (the wall\n"
+        "time in microseconds since the epoch of its first sample, so that a test can time\n"
+        "its joint states to it); --loop repeats it. --silent and --bad-crc leave the sample\n"
+        "reads in [T0, T1) s of that timeline unanswered or answer them with a wrong CRC.\n"
+        "At exit stderr says what was answered (counters, the first sample read's time).\n");
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     static const struct option opts[] = {
-        {"config", required_argument, NULL, 'c'},   {"duration", required_argument, NULL, 'd'},
+        {"config", required_argument, NULL, 'c'},     {"duration", required_argument, NULL, 'd'},
         {"full-scale", required_argument, NULL, 'f'}, {"help", no_argument, NULL, 'h'},
-        {"link", required_argument, NULL, 'k'},     {"loop", no_argument, NULL, 'l'},
-        {"recording", required_argument, NULL, 'r'}, {"slave", required_argument, NULL, 's'},
-        {"start-on-read", no_argument, NULL, 'S'}, {"epoch", required_argument, NULL, 'e'},
-        {"wrench", required_argument, NULL, 'w'},   {"silent", required_argument, NULL, 'q'},
-        {"bad-crc", required_argument, NULL, 'b'},  {NULL, 0, NULL, 0},
+        {"link", required_argument, NULL, 'k'},       {"loop", no_argument, NULL, 'l'},
+        {"recording", required_argument, NULL, 'r'},  {"slave", required_argument, NULL, 's'},
+        {"start-on-read", no_argument, NULL, 'S'},    {"epoch", required_argument, NULL, 'e'},
+        {"wrench", required_argument, NULL, 'w'},     {"silent", required_argument, NULL, 'q'},
+        {"bad-crc", required_argument, NULL, 'b'},    {NULL, 0, NULL, 0},
     };
     const char *config = NULL, *recording = NULL, *link_path = NULL;
     double wrench[6] = {0, 0, 9.81, 0, 0, 0}, fs[2] = {0, 0}, duration = 0;
@@ -258,54 +260,76 @@ int main(int argc, char **argv)
     double silent[2] = {0, 0}, bad_crc[2] = {0, 0};
     while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
         switch (c) {
-        case 'c': config = optarg; break;
-        case 'd': duration = strtod(optarg, NULL); break;
-        case 'e': {
-            char *end;
-            epoch_us = strtoll(optarg, &end, 10);
-            if (*end || epoch_us <= 0) {
-                fprintf(stderr, "loadid-modbus-sim: --epoch: microseconds since the epoch, not %s\n",
-                        optarg);
-                return 2;
+            case 'c':
+                config = optarg;
+                break;
+            case 'd':
+                duration = strtod(optarg, NULL);
+                break;
+            case 'e': {
+                char *end;
+                epoch_us = strtoll(optarg, &end, 10);
+                if (*end || epoch_us <= 0) {
+                    fprintf(stderr,
+                            "loadid-modbus-sim: --epoch: microseconds since the epoch, not %s\n",
+                            optarg);
+                    return 2;
+                }
+                break;
             }
-            break;
-        }
-        case 'f':
-            if (parse_list(optarg, fs, 2) || !(fs[0] > 0) || !(fs[1] > 0)) {
-                fprintf(stderr, "loadid-modbus-sim: --full-scale: expected FN,TNM > 0\n");
+            case 'f':
+                if (parse_list(optarg, fs, 2) || !(fs[0] > 0) || !(fs[1] > 0)) {
+                    fprintf(stderr, "loadid-modbus-sim: --full-scale: expected FN,TNM > 0\n");
+                    return 2;
+                }
+                have_fs = true;
+                break;
+            case 'h':
+                usage(stdout);
+                return 0;
+            case 'q':
+            case 'b':
+                if (parse_window(optarg, c == 'q' ? silent : bad_crc) != 0) {
+                    fprintf(stderr, "loadid-modbus-sim: --%s: expected T0:T1 in seconds, T0 < T1\n",
+                            c == 'q' ? "silent" : "bad-crc");
+                    return 2;
+                }
+                break;
+            case 'k':
+                link_path = optarg;
+                break;
+            case 'l':
+                loop = true;
+                break;
+            case 'r':
+                recording = optarg;
+                break;
+            case 's':
+                slave = atoi(optarg);
+                break;
+            case 'S':
+                start_on_read = true;
+                break;
+            case 'w':
+                if (parse_list(optarg, wrench, 6)) {
+                    fprintf(
+                        stderr,
+                        "loadid-modbus-sim: --wrench: expected six numbers FX,FY,FZ,TX,TY,TZ\n");
+                    return 2;
+                }
+                have_wrench = true;
+                break;
+            default:
+                usage(stderr);
                 return 2;
-            }
-            have_fs = true;
-            break;
-        case 'h': usage(stdout); return 0;
-        case 'q':
-        case 'b':
-            if (parse_window(optarg, c == 'q' ? silent : bad_crc) != 0) {
-                fprintf(stderr, "loadid-modbus-sim: --%s: expected T0:T1 in seconds, T0 < T1\n",
-                        c == 'q' ? "silent" : "bad-crc");
-                return 2;
-            }
-            break;
-        case 'k': link_path = optarg; break;
-        case 'l': loop = true; break;
-        case 'r': recording = optarg; break;
-        case 's': slave = atoi(optarg); break;
-        case 'S': start_on_read = true; break;
-        case 'w':
-            if (parse_list(optarg, wrench, 6)) {
-                fprintf(stderr, "loadid-modbus-sim: --wrench: expected six numbers FX,FY,FZ,TX,TY,TZ\n");
-                return 2;
-            }
-            have_wrench = true;
-            break;
-        default: usage(stderr); return 2;
         }
     }
     if (optind < argc || (have_wrench && recording) || slave < 1 || slave > 247 || duration < 0) {
         fprintf(stderr, "loadid-modbus-sim: %s\n",
-                optind < argc ? "unexpected argument" :
-                have_wrench && recording ? "--wrench and --recording exclude each other" :
-                duration < 0 ? "--duration must be >= 0" : "--slave must be 1..247");
+                optind < argc              ? "unexpected argument"
+                : have_wrench && recording ? "--wrench and --recording exclude each other"
+                : duration < 0             ? "--duration must be >= 0"
+                                           : "--slave must be 1..247");
         return 2;
     }
     loadid_config_t cfg;
@@ -324,7 +348,8 @@ int main(int argc, char **argv)
     }
     uint16_t holding[LOADID_MODBUS_FT_HOLDING_COUNT];
     if (loadid_modbus_ft_encode_full_scale(sim.fs_force, sim.fs_moment, holding) != 0) {
-        fprintf(stderr, "loadid-modbus-sim: a full scale outside 0.1..6553.5 N or 0.01..655.35 N m\n");
+        fprintf(stderr,
+                "loadid-modbus-sim: a full scale outside 0.1..6553.5 N or 0.01..655.35 N m\n");
         return 2;
     }
     /* The sensor serves the full scales its registers carry. */

@@ -79,8 +79,10 @@ static void on_lcm(const lcm_recv_buf_t *rbuf, const char *channel, void *ctx) {
                                .datalen = (int32_t)rbuf->data_size,
                                .channel = (char *)channel,
                                .data = rbuf->data};
-    if (lcm_eventlog_write_event(s->log, &ev) != 0) s->write_errors++;
-    else s->events++;
+    if (lcm_eventlog_write_event(s->log, &ev) != 0)
+        s->write_errors++;
+    else
+        s->events++;
 }
 
 /* Creates dir/name, refusing to overwrite one that exists. Returns the
@@ -101,17 +103,24 @@ int main(int argc, char **argv) {
     const char *config_path = NULL, *ifname_opt = NULL, *url_opt = NULL, *out_dir = NULL;
     double duration = 0; /* 0: until a signal */
     int all_channels = 0, quiet = 0;
-    static const struct option opts[] = {
-        {"all-channels", no_argument, NULL, 'a'},    {"config", required_argument, NULL, 'c'},
-        {"duration", required_argument, NULL, 'd'},  {"help", no_argument, NULL, 'h'},
-        {"interface", required_argument, NULL, 'i'}, {"lcm-url", required_argument, NULL, 'u'},
-        {"out", required_argument, NULL, 'o'},       {"quiet", no_argument, NULL, 'q'},
-        {NULL, 0, NULL, 0}};
+    static const struct option opts[] = {{"all-channels", no_argument, NULL, 'a'},
+                                         {"config", required_argument, NULL, 'c'},
+                                         {"duration", required_argument, NULL, 'd'},
+                                         {"help", no_argument, NULL, 'h'},
+                                         {"interface", required_argument, NULL, 'i'},
+                                         {"lcm-url", required_argument, NULL, 'u'},
+                                         {"out", required_argument, NULL, 'o'},
+                                         {"quiet", no_argument, NULL, 'q'},
+                                         {NULL, 0, NULL, 0}};
     int c;
     while ((c = getopt_long(argc, argv, "ac:d:hi:o:qu:", opts, NULL)) != -1) {
         switch (c) {
-            case 'a': all_channels = 1; break;
-            case 'c': config_path = optarg; break;
+            case 'a':
+                all_channels = 1;
+                break;
+            case 'c':
+                config_path = optarg;
+                break;
             case 'd': {
                 char *end;
                 duration = strtod(optarg, &end);
@@ -121,12 +130,24 @@ int main(int argc, char **argv) {
                 }
                 break;
             }
-            case 'h': usage(stdout); return 0;
-            case 'i': ifname_opt = optarg; break;
-            case 'o': out_dir = optarg; break;
-            case 'q': quiet = 1; break;
-            case 'u': url_opt = optarg; break;
-            default: usage(stderr); return 2;
+            case 'h':
+                usage(stdout);
+                return 0;
+            case 'i':
+                ifname_opt = optarg;
+                break;
+            case 'o':
+                out_dir = optarg;
+                break;
+            case 'q':
+                quiet = 1;
+                break;
+            case 'u':
+                url_opt = optarg;
+                break;
+            default:
+                usage(stderr);
+                return 2;
         }
     }
     if (optind != argc || !out_dir) {
@@ -161,13 +182,14 @@ int main(int argc, char **argv) {
     }
     char can_path[4200], lcm_path[4200];
     FILE *can_log = create_new(out_dir, "can.log", can_path, sizeof can_path, err, sizeof err);
-    FILE *lcm_probe = can_log ? create_new(out_dir, "lcm.log", lcm_path, sizeof lcm_path, err,
-                                           sizeof err) : NULL;
+    FILE *lcm_probe =
+        can_log ? create_new(out_dir, "lcm.log", lcm_path, sizeof lcm_path, err, sizeof err) : NULL;
     lcm_sink_t sink = {0};
     if (lcm_probe) {
         fclose(lcm_probe); /* exists now, empty: the event log takes it over */
         sink.log = lcm_eventlog_create(lcm_path, "w");
-        if (!sink.log) snprintf(err, sizeof err, "%s: cannot create: %s", lcm_path, strerror(errno));
+        if (!sink.log)
+            snprintf(err, sizeof err, "%s: cannot create: %s", lcm_path, strerror(errno));
     }
     if (!sink.log) {
         fprintf(stderr, "%s: %s\n", prog, err);
@@ -238,9 +260,12 @@ int main(int argc, char **argv) {
                 }
                 char line[LOADID_CANDUMP_LINE_MAX];
                 const int len = loadid_candump_format(&f, ifname, line, sizeof line);
-                if (len < 0) format_errors++;
-                else if (fwrite(line, 1, (size_t)len, can_log) != (size_t)len) rc = 1;
-                else frames++;
+                if (len < 0)
+                    format_errors++;
+                else if (fwrite(line, 1, (size_t)len, can_log) != (size_t)len)
+                    rc = 1;
+                else
+                    frames++;
             }
             if (r < 0) {
                 fprintf(stderr, "%s: CAN %s: %s; reopening\n", prog, ifname, strerror(-r));

@@ -90,7 +90,7 @@ static int republish(lcm_t *lcm, const loadid_rec_event_t *ev, int64_t shift) {
  * often it went. */
 typedef struct {
     const char *ifname;
-    int fd;                /* -1 while the interface is gone */
+    int fd; /* -1 while the interface is gone */
     int64_t lost, gone;
 } can_out_t;
 
@@ -172,15 +172,21 @@ int main(int argc, char **argv) {
     const char *ifname = NULL, *url = "udpm://239.255.76.67:7667?ttl=0";
     double speed = 1;
     int loop = 0;
-    static const struct option opts[] = {
-        {"interface", required_argument, NULL, 'i'}, {"lcm-url", required_argument, NULL, 'u'},
-        {"speed", required_argument, NULL, 's'},     {"loop", no_argument, NULL, 'l'},
-        {"help", no_argument, NULL, 'h'},            {NULL, 0, NULL, 0}};
+    static const struct option opts[] = {{"interface", required_argument, NULL, 'i'},
+                                         {"lcm-url", required_argument, NULL, 'u'},
+                                         {"speed", required_argument, NULL, 's'},
+                                         {"loop", no_argument, NULL, 'l'},
+                                         {"help", no_argument, NULL, 'h'},
+                                         {NULL, 0, NULL, 0}};
     int c;
     while ((c = getopt_long(argc, argv, "i:u:s:lh", opts, NULL)) != -1) {
         switch (c) {
-            case 'i': ifname = optarg; break;
-            case 'u': url = optarg; break;
+            case 'i':
+                ifname = optarg;
+                break;
+            case 'u':
+                url = optarg;
+                break;
             case 's': {
                 char *end;
                 speed = strtod(optarg, &end);
@@ -190,9 +196,15 @@ int main(int argc, char **argv) {
                 }
                 break;
             }
-            case 'l': loop = 1; break;
-            case 'h': usage(stdout); return 0;
-            default: usage(stderr); return 2;
+            case 'l':
+                loop = 1;
+                break;
+            case 'h':
+                usage(stdout);
+                return 0;
+            default:
+                usage(stderr);
+                return 2;
         }
     }
     if (optind + 1 != argc || !ifname) {

@@ -61,28 +61,29 @@ static struct {
 } s;
 
 static void usage(FILE *out) {
-    fprintf(out,
-            "usage: %s --trajectory TRAJ.yaml --out DIR [--force] [--config FILE] [--seed N]\n"
-            "                  [--load-name NAME] [--start-utime US] [--damage KIND=VALUE]...\n"
-            "                  [--values FILE.csv] [--load-phi m,mcx,mcy,mcz,Ixx,Ixy,Ixz,Iyy,Iyz,Izz]\n"
-            "Simulates a recording (can.log, lcm.log, truth.yaml in DIR) of the configured\n"
-            "robot (robot.*) following the trajectory of loadid-traj with the load\n"
-            "simulation.load_phi (default the paper's o1) and the distal part distal.phi,\n"
-            "offsets simulation.offset, noise noise.*, servo, backlash, vibration and\n"
-            "encoder of simulation.*, JR3 full scales jr3.*, CAN can.*; like real\n"
-            "hardware data with simulation.zero false (no ZERO command), drift (of\n"
-            "the offset), accel_bias, alpha_bias, jitter_us (of the time stamps) and\n"
-            "trajectory_scale < 1 (slower motion).\n"
-            "--damage writes a deliberately damaged recording; KIND is one of\n"
-            "  drop-frames=P skip-samples=P bit-errors=P saturate=P fault=P bad-frames=P\n"
-            "  nan-joints=P stall-joints=T0:T1 (seconds); may be repeated.\n"
-            "DIR must not exist or be empty; --force writes into a folder that holds files\n"
-            "(can.log, lcm.log and truth.yaml are overwritten, other files stay).\n"
-            "--load-phi overrides simulation.load_phi (eq. 5, inertia about the origin of S).\n"
-            "--values writes what each CAN sample encodes, in SI (t_us, sequence, f, tau,\n"
-            "a - g, alpha), before rounding to counts, and the damage done to it (bits:\n"
-            "1 skipped, 2 a frame dropped, 4 a bit flipped, 8 saturated, 16 fault).\n",
-            prog);
+    fprintf(
+        out,
+        "usage: %s --trajectory TRAJ.yaml --out DIR [--force] [--config FILE] [--seed N]\n"
+        "                  [--load-name NAME] [--start-utime US] [--damage KIND=VALUE]...\n"
+        "                  [--values FILE.csv] [--load-phi m,mcx,mcy,mcz,Ixx,Ixy,Ixz,Iyy,Iyz,Izz]\n"
+        "Simulates a recording (can.log, lcm.log, truth.yaml in DIR) of the configured\n"
+        "robot (robot.*) following the trajectory of loadid-traj with the load\n"
+        "simulation.load_phi (default the paper's o1) and the distal part distal.phi,\n"
+        "offsets simulation.offset, noise noise.*, servo, backlash, vibration and\n"
+        "encoder of simulation.*, JR3 full scales jr3.*, CAN can.*; like real\n"
+        "hardware data with simulation.zero false (no ZERO command), drift (of\n"
+        "the offset), accel_bias, alpha_bias, jitter_us (of the time stamps) and\n"
+        "trajectory_scale < 1 (slower motion).\n"
+        "--damage writes a deliberately damaged recording; KIND is one of\n"
+        "  drop-frames=P skip-samples=P bit-errors=P saturate=P fault=P bad-frames=P\n"
+        "  nan-joints=P stall-joints=T0:T1 (seconds); may be repeated.\n"
+        "DIR must not exist or be empty; --force writes into a folder that holds files\n"
+        "(can.log, lcm.log and truth.yaml are overwritten, other files stay).\n"
+        "--load-phi overrides simulation.load_phi (eq. 5, inertia about the origin of S).\n"
+        "--values writes what each CAN sample encodes, in SI (t_us, sequence, f, tau,\n"
+        "a - g, alpha), before rounding to counts, and the damage done to it (bits:\n"
+        "1 skipped, 2 a frame dropped, 4 a bit flipped, 8 saturated, 16 fault).\n",
+        prog);
 }
 
 /* Ten comma-separated finite numbers. */
@@ -107,25 +108,43 @@ int main(int argc, char **argv) {
     long long seed = -1, t0 = 1700000000000000LL;
     loadid_damage_init(&s.damage, 0);
     char err[1024];
-    static const struct option opts[] = {
-        {"config", required_argument, NULL, 'c'},    {"trajectory", required_argument, NULL, 't'},
-        {"out", required_argument, NULL, 'o'},       {"seed", required_argument, NULL, 'S'},
-        {"load-name", required_argument, NULL, 'l'}, {"start-utime", required_argument, NULL, 'u'},
-        {"damage", required_argument, NULL, 'd'},    {"values", required_argument, NULL, 'v'},
-        {"load-phi", required_argument, NULL, 'p'},  {"force", no_argument, NULL, 'f'},
-        {"help", no_argument, NULL, 'h'},
-        {NULL, 0, NULL, 0}};
+    static const struct option opts[] = {{"config", required_argument, NULL, 'c'},
+                                         {"trajectory", required_argument, NULL, 't'},
+                                         {"out", required_argument, NULL, 'o'},
+                                         {"seed", required_argument, NULL, 'S'},
+                                         {"load-name", required_argument, NULL, 'l'},
+                                         {"start-utime", required_argument, NULL, 'u'},
+                                         {"damage", required_argument, NULL, 'd'},
+                                         {"values", required_argument, NULL, 'v'},
+                                         {"load-phi", required_argument, NULL, 'p'},
+                                         {"force", no_argument, NULL, 'f'},
+                                         {"help", no_argument, NULL, 'h'},
+                                         {NULL, 0, NULL, 0}};
     int c;
     while ((c = getopt_long(argc, argv, "c:t:o:h", opts, NULL)) != -1) {
         char *end;
         switch (c) {
-            case 'c': config_path = optarg; break;
-            case 't': traj_path = optarg; break;
-            case 'o': out_dir = optarg; break;
-            case 'l': load_name = optarg; break;
-            case 'v': values_path = optarg; break;
-            case 'p': load_phi = optarg; break;
-            case 'f': force = 1; break;
+            case 'c':
+                config_path = optarg;
+                break;
+            case 't':
+                traj_path = optarg;
+                break;
+            case 'o':
+                out_dir = optarg;
+                break;
+            case 'l':
+                load_name = optarg;
+                break;
+            case 'v':
+                values_path = optarg;
+                break;
+            case 'p':
+                load_phi = optarg;
+                break;
+            case 'f':
+                force = 1;
+                break;
             case 'S':
             case 'u': {
                 errno = 0;
@@ -135,7 +154,10 @@ int main(int argc, char **argv) {
                             c == 'S' ? "seed" : "start-utime", optarg);
                     return 2;
                 }
-                if (c == 'S') seed = v; else t0 = v;
+                if (c == 'S')
+                    seed = v;
+                else
+                    t0 = v;
                 break;
             }
             case 'd':
@@ -144,8 +166,12 @@ int main(int argc, char **argv) {
                     return 2;
                 }
                 break;
-            case 'h': usage(stdout); return 0;
-            default: usage(stderr); return 2;
+            case 'h':
+                usage(stdout);
+                return 0;
+            default:
+                usage(stderr);
+                return 2;
         }
     }
     if (optind != argc || !traj_path || !out_dir) {
@@ -163,7 +189,8 @@ int main(int argc, char **argv) {
         return 1;
     }
     if (load_phi && parse_phi(load_phi, s.cfg.sim_load_phi) != 0) {
-        fprintf(stderr, "%s: --load-phi: expected 10 comma-separated numbers: %s\n", prog, load_phi);
+        fprintf(stderr, "%s: --load-phi: expected 10 comma-separated numbers: %s\n", prog,
+                load_phi);
         return 2;
     }
     const uint64_t the_seed = seed >= 0 ? (uint64_t)seed : s.cfg.sim_seed;
@@ -207,7 +234,9 @@ int main(int argc, char **argv) {
     fprintf(stderr, "%s: %s: %lld samples, %.2f s, %s, START at %.2f s\n", prog, out_dir,
             (long long)sum.samples, sum.duration_s, zero, sum.start_s);
     if (sum.jitter_clipped > 0)
-        fprintf(stderr, "%s: %s: %lld jittered time stamps clipped to keep their stream in "
-                        "order\n", prog, out_dir, (long long)sum.jitter_clipped);
+        fprintf(stderr,
+                "%s: %s: %lld jittered time stamps clipped to keep their stream in "
+                "order\n",
+                prog, out_dir, (long long)sum.jitter_clipped);
     return 0;
 }

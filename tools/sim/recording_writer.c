@@ -18,7 +18,7 @@ struct loadid_recording_writer {
     lcm_eventlog_t *lcm;
     char ifname[32];
     int64_t eventnum;
-    int failed;                   /* errno of the first write that failed */
+    int failed; /* errno of the first write that failed */
     loadid_recording_counts_t counts;
 };
 
@@ -51,8 +51,10 @@ int loadid_recording_dir_check(const char *dir, int force, const char *force_opt
         }
     closedir(d);
     if (!first[0]) return 0;
-    snprintf(err, errlen, "%s: not empty (it holds %s): give another folder, or %s to write "
-                          "the recording into it", dir, first, force_option);
+    snprintf(err, errlen,
+             "%s: not empty (it holds %s): give another folder, or %s to write "
+             "the recording into it",
+             dir, first, force_option);
     return -EEXIST;
 }
 
@@ -88,7 +90,8 @@ int loadid_recording_can(loadid_recording_writer_t *w, const loadid_can_frame_t 
     char line[128];
     int n = loadid_candump_format(frame, w->ifname, line, sizeof line);
     if (n < 0) return n;
-    if (fwrite(line, 1, (size_t)n, w->can) != (size_t)n && !w->failed) w->failed = errno ? errno : EIO;
+    if (fwrite(line, 1, (size_t)n, w->can) != (size_t)n && !w->failed)
+        w->failed = errno ? errno : EIO;
     w->counts.can_frames++;
     return 0;
 }
@@ -125,7 +128,8 @@ int loadid_recording_joints(loadid_recording_writer_t *w, int64_t utime, int num
 
 int loadid_recording_command(loadid_recording_writer_t *w, int64_t utime, int action,
                              const char *load_name) {
-    loadid_command_t msg = {.utime = utime, .action = (int8_t)action, .load_name = (char *)load_name};
+    loadid_command_t msg = {
+        .utime = utime, .action = (int8_t)action, .load_name = (char *)load_name};
     uint8_t buf[1024];
     int len = loadid_command_t_encoded_size(&msg);
     if (len < 0 || len > (int)sizeof buf || loadid_command_t_encode(buf, 0, len, &msg) != len)

@@ -71,7 +71,7 @@ void loadid_servo_advance(loadid_servo_t *s, double t, loadid_servo_state_t *out
         /* d/dt of the servo law: the motor's jerk. */
         jerk[i] = w * w * (sv[i] - s->v[i]) + 2 * z * w * (sa[i] - a[i]);
         const double th = tanh(s->v[i] / vb), sech2 = 1 - th * th;
-        const double d1 = hb * sech2 / vb;              /* d phi / dv */
+        const double d1 = hb * sech2 / vb;                  /* d phi / dv */
         const double d2 = -2 * hb * sech2 * th / (vb * vb); /* d2 phi / dv2 */
         out->motor[i] = s->q[i];
         out->setpoint[i] = sq[i];

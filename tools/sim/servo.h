@@ -23,25 +23,25 @@ extern "C" {
 #endif
 
 typedef struct {
-    double bandwidth_hz;          /* natural frequency of the servo */
-    double damping;               /* zeta */
-    double backlash;              /* play b [rad or m] */
-    double backlash_velocity;     /* v_b [rad/s or m/s], default 0.05 */
-    double substep_s;             /* integration step, default 1e-4 */
+    double bandwidth_hz;      /* natural frequency of the servo */
+    double damping;           /* zeta */
+    double backlash;          /* play b [rad or m] */
+    double backlash_velocity; /* v_b [rad/s or m/s], default 0.05 */
+    double substep_s;         /* integration step, default 1e-4 */
 } loadid_servo_config_t;
 
 typedef struct {
     loadid_servo_config_t cfg;
-    const loadid_fourier_traj_t *traj;  /* the setpoints */
-    double t0;                    /* trajectory time 0 in simulation time */
+    const loadid_fourier_traj_t *traj; /* the setpoints */
+    double t0;                         /* trajectory time 0 in simulation time */
     int n;
-    double t;                     /* simulation time [s] */
+    double t;                                          /* simulation time [s] */
     double q[LOADID_MAX_JOINTS], v[LOADID_MAX_JOINTS]; /* motor state */
 } loadid_servo_t;
 
 /* Motor and link state of every joint at one instant. */
 typedef struct {
-    double motor[LOADID_MAX_JOINTS];                   /* what the encoders see */
+    double motor[LOADID_MAX_JOINTS]; /* what the encoders see */
     double link[LOADID_MAX_JOINTS], link_d[LOADID_MAX_JOINTS], link_dd[LOADID_MAX_JOINTS];
     double setpoint[LOADID_MAX_JOINTS];
 } loadid_servo_state_t;

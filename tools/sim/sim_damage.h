@@ -39,9 +39,9 @@ enum {
 };
 
 typedef struct {
-    double p[LOADID_DAMAGE_KINDS];       /* probabilities, 0 = off */
-    double stall_from, stall_to;         /* [s]; stall_to <= stall_from: off */
-    int64_t count[LOADID_DAMAGE_KINDS];  /* what was done */
+    double p[LOADID_DAMAGE_KINDS];      /* probabilities, 0 = off */
+    double stall_from, stall_to;        /* [s]; stall_to <= stall_from: off */
+    int64_t count[LOADID_DAMAGE_KINDS]; /* what was done */
     int64_t stalled_joint_msgs;
     loadid_rng_t rng;
 } loadid_damage_t;

@@ -48,12 +48,12 @@ typedef struct {
     loadid_rng_t rng;
     loadid_damage_t damage;
     loadid_recording_writer_t *rec;
-    FILE *values;                 /* --values: what each sample encodes, in SI */
-    unsigned sample_damage;       /* SAMPLE_* of the CAN sample being written */
+    FILE *values;           /* --values: what each sample encodes, in SI */
+    unsigned sample_damage; /* SAMPLE_* of the CAN sample being written */
     double vib_phase[2][3];
-    loadid_rng_t jitter_rng;      /* simulation.jitter_us: a stream of its own */
-    int64_t last_joint_us;        /* stamp of the last joint state written */
-    int64_t last_can_us;          /* time of the last CAN frame written */
+    loadid_rng_t jitter_rng; /* simulation.jitter_us: a stream of its own */
+    int64_t last_joint_us;   /* stamp of the last joint state written */
+    int64_t last_can_us;     /* time of the last CAN frame written */
     /* counts */
     int64_t samples, saturated_samples, jitter_clipped;
 } sim_t;
@@ -95,14 +95,15 @@ static void measure(sim_t *s, double t, const loadid_motion_t *m, double value[4
     double offset[6];
     for (int i = 0; i < 6; ++i) offset[i] = s->cfg.sim_offset[i] + s->cfg.sim_drift[i] * t;
     for (int i = 0; i < 3; ++i) {
-        value[LOADID_JR3_FORCE][i] = load[i] + distal[i] + offset[i] +
-                                     s->cfg.sim_noise_force * loadid_rng_normal(&s->rng);
+        value[LOADID_JR3_FORCE][i] =
+            load[i] + distal[i] + offset[i] + s->cfg.sim_noise_force * loadid_rng_normal(&s->rng);
         value[LOADID_JR3_MOMENT][i] = load[3 + i] + distal[3 + i] + offset[3 + i] +
                                       s->cfg.sim_noise_torque * loadid_rng_normal(&s->rng);
     }
     const double wt = kTwoPi * s->cfg.sim_vibration_hz * t;
     for (int i = 0; i < 3; ++i) {
-        value[LOADID_JR3_LINEAR][i] = m->spec[i] + s->cfg.sim_noise_linear * loadid_rng_normal(&s->rng) +
+        value[LOADID_JR3_LINEAR][i] = m->spec[i] +
+                                      s->cfg.sim_noise_linear * loadid_rng_normal(&s->rng) +
                                       s->cfg.sim_vibration_linear * sin(wt + s->vib_phase[0][i]);
         value[LOADID_JR3_ANGULAR][i] = m->alpha[i] +
                                        s->cfg.sim_noise_angular * loadid_rng_normal(&s->rng) +
@@ -137,9 +138,11 @@ static int can_sample(sim_t *s, int64_t k, int64_t t, double sim_t_s) {
     measure(s, sim_t_s, &m, value);
     const int saturate = loadid_damage_now(&s->damage, LOADID_DAMAGE_SATURATE);
     if (saturate) value[LOADID_JR3_FORCE][0] = 3 * s->jr3.full_scale[LOADID_JR3_FORCE][0];
-    const unsigned fault = loadid_damage_now(&s->damage, LOADID_DAMAGE_FAULT) ? LOADID_JR3_ALL_GROUPS : 0;
+    const unsigned fault =
+        loadid_damage_now(&s->damage, LOADID_DAMAGE_FAULT) ? LOADID_JR3_ALL_GROUPS : 0;
     loadid_can_frame_t frames[4];
-    int sat = loadid_jr3_encode(&s->jr3, (const double(*)[3])value, (uint8_t)(k & 0xFF), fault, t, frames);
+    int sat = loadid_jr3_encode(&s->jr3, (const double(*)[3])value, (uint8_t)(k & 0xFF), fault, t,
+                                frames);
     if (sat < 0) return sat;
     s->samples++;
     if (sat) s->saturated_samples++;
@@ -256,10 +259,11 @@ static int write_truth(const sim_t *s, const char *dir, const char *traj_path,
     fprintf(f, "servo:\n  bandwidth_hz: %.17g\n  damping: %.17g\n  backlash: %.17g\n",
             c->sim_servo_bandwidth_hz, c->sim_servo_damping, c->sim_backlash);
     fprintf(f, "encoder_counts: %.17g\n", c->sim_encoder_counts);
-    fprintf(f, "robot:\n  urdf: \"%s\"\n  base_link: \"%s\"\n  sensor_link: \"%s\"\n", c->robot_urdf,
-            c->robot_base_link, c->robot_sensor_link);
+    fprintf(f, "robot:\n  urdf: \"%s\"\n  base_link: \"%s\"\n  sensor_link: \"%s\"\n",
+            c->robot_urdf, c->robot_base_link, c->robot_sensor_link);
     fprintf(f, "trajectory:\n  file: \"%s\"\n  kappa_design: %.17g\n", traj_path, s->kappa_design);
-    fprintf(f, "can:\n  interface: \"%s\"\n  base_id: 0x%X\n", c->can_interface, (unsigned)c->can_base_id);
+    fprintf(f, "can:\n  interface: \"%s\"\n  base_id: 0x%X\n", c->can_interface,
+            (unsigned)c->can_base_id);
     fprintf(f, "jr3_full_scale:\n");
     const char *g[4] = {"force", "moment", "linear", "angular"};
     for (int i = 0; i < 4; ++i) {
@@ -267,24 +271,27 @@ static int write_truth(const sim_t *s, const char *dir, const char *traj_path,
         list(f, s->jr3.full_scale[i], 3);
         fputc('\n', f);
     }
-    fprintf(f, "times:                 # utime [us]\n  begin: %lld\n  zero: %lld\n  start: %lld\n"
-               "  trajectory: %lld\n  active_end: %lld\n  end: %lld\n",
+    fprintf(f,
+            "times:                 # utime [us]\n  begin: %lld\n  zero: %lld\n  start: %lld\n"
+            "  trajectory: %lld\n  active_end: %lld\n  end: %lld\n",
             (long long)t0, (long long)zero_us, (long long)start_us, (long long)traj_us,
             (long long)active_end_us, (long long)end_us);
     loadid_recording_counts_t rc;
     loadid_recording_counts(s->rec, &rc);
-    fprintf(f, "counts:\n  samples: %lld\n  saturated_samples: %lld\n  can_frames: %lld\n"
-               "  joint_msgs: %lld\n  commands: %lld\n",
+    fprintf(f,
+            "counts:\n  samples: %lld\n  saturated_samples: %lld\n  can_frames: %lld\n"
+            "  joint_msgs: %lld\n  commands: %lld\n",
             (long long)s->samples, (long long)s->saturated_samples, (long long)rc.can_frames,
             (long long)rc.joint_msgs, (long long)rc.commands);
     fprintf(f, "damage:\n");
     for (int k = 0; k < LOADID_DAMAGE_KINDS; ++k)
-        fprintf(f, "  %s: {probability: %.17g, count: %lld}\n", loadid_damage_name(k), s->damage.p[k],
-                (long long)s->damage.count[k]);
+        fprintf(f, "  %s: {probability: %.17g, count: %lld}\n", loadid_damage_name(k),
+                s->damage.p[k], (long long)s->damage.count[k]);
     fprintf(f, "  stall-joints: {from_s: %.17g, to_s: %.17g, count: %lld}\n", s->damage.stall_from,
             s->damage.stall_to, (long long)s->damage.stalled_joint_msgs);
-    fprintf(f, "simulation:            # imitating real hardware data (loadid.yaml simulation.*)\n"
-               "  zero: %s\n  still_s: %.17g\n  drift: ",
+    fprintf(f,
+            "simulation:            # imitating real hardware data (loadid.yaml simulation.*)\n"
+            "  zero: %s\n  still_s: %.17g\n  drift: ",
             c->sim_zero ? "true" : "false", c->sim_still_s);
     list(f, c->sim_drift, 6);
     fprintf(f, "\n  accel_bias: ");
@@ -297,7 +304,6 @@ static int write_truth(const sim_t *s, const char *dir, const char *traj_path,
     if (fclose(f) != 0 && !e) e = errno;
     return -e;
 }
-
 
 /* Frees s and reports why in err; returns rc. */
 static int fail(sim_t *s, char *err, size_t errlen, int rc, const char *what) {
@@ -327,8 +333,10 @@ int loadid_sim_run(const loadid_sim_options_t *o, loadid_sim_summary_t *sum, cha
             }
     if (o->warn && s->cfg.sim_zero && s->cfg.sim_still_s < ZERO_AT_S + s->cfg.zeroing_window_s) {
         char msg[160];
-        snprintf(msg, sizeof msg, "simulation.still_s %.3g s leaves less than zeroing.window_s "
-                                  "after ZERO at %.2f s", s->cfg.sim_still_s, ZERO_AT_S);
+        snprintf(msg, sizeof msg,
+                 "simulation.still_s %.3g s leaves less than zeroing.window_s "
+                 "after ZERO at %.2f s",
+                 s->cfg.sim_still_s, ZERO_AT_S);
         o->warn(o->warn_ctx, msg);
     }
     int rc = loadid_kin_create(&s->chain, s->cfg.robot_gravity, &s->kin);

@@ -52,17 +52,17 @@ typedef struct {
     const char *values_path;           /* NULL, or the --values CSV */
     const char *load_name;             /* in the commands and truth.yaml */
     uint64_t seed;
-    int64_t start_utime;               /* time of the first joint state [us] */
-    loadid_damage_t damage;            /* probabilities and stall window */
+    int64_t start_utime;                      /* time of the first joint state [us] */
+    loadid_damage_t damage;                   /* probabilities and stall window */
     void (*warn)(void *ctx, const char *msg); /* a one-line warning; may be NULL */
     void *warn_ctx;
 } loadid_sim_options_t;
 
 typedef struct {
-    int64_t samples;                   /* CAN samples simulated */
+    int64_t samples;                    /* CAN samples simulated */
     double duration_s, zero_s, start_s; /* length; ZERO (-1: none, simulation.zero
                                            false) and START after the start */
-    int64_t jitter_clipped;            /* jittered stamps clipped to keep order */
+    int64_t jitter_clipped;             /* jittered stamps clipped to keep order */
 } loadid_sim_summary_t;
 
 /* Simulates and writes out_dir/can.log, lcm.log, truth.yaml (its times.zero

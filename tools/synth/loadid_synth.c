@@ -12,7 +12,9 @@ const double loadid_synth_phi_o1[10] = {
     1.00, -43.5e-3, 28.5e-3, 22.5e-3, 2.21e-3, 1.22e-3, 0.96e-3, 3.74e-3, -0.63e-3, 4.95e-3,
 };
 
-static uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+static uint64_t rotl(uint64_t x, int k) {
+    return (x << k) | (x >> (64 - k));
+}
 
 static uint64_t splitmix64(uint64_t *x) {
     uint64_t z = (*x += 0x9E3779B97F4A7C15ULL);
@@ -40,7 +42,9 @@ static uint64_t next_u64(loadid_rng_t *rng) {
     return result;
 }
 
-double loadid_rng_uniform(loadid_rng_t *rng) { return (double)(next_u64(rng) >> 11) * 0x1.0p-53; }
+double loadid_rng_uniform(loadid_rng_t *rng) {
+    return (double)(next_u64(rng) >> 11) * 0x1.0p-53;
+}
 
 double loadid_rng_normal(loadid_rng_t *rng) {
     if (rng->has_spare) {
@@ -149,7 +153,8 @@ static void elementary(int ax, const double q[3], mat3 R, mat3 Rd, mat3 Rdd) {
         }
 }
 
-int loadid_synth_motion(const loadid_synth_traj_t *traj, double t, int still, loadid_motion_t *out) {
+int loadid_synth_motion(const loadid_synth_traj_t *traj, double t, int still,
+                        loadid_motion_t *out) {
     if (!traj || !out) return -EINVAL;
     double q[6][3];
     for (int i = 0; i < 6; ++i) coordinate(traj, i, t, still, q[i]);
@@ -178,13 +183,15 @@ int loadid_synth_motion(const loadid_synth_traj_t *traj, double t, int still, lo
         for (int j = 0; j < 3; ++j) Rt[i][j] = R[j][i];
     mat_mul(Rt, Rd, W);
     mat_mul(Rt, Rdd, Q);
-    const double w[3] = {0.5 * (W[2][1] - W[1][2]), 0.5 * (W[0][2] - W[2][0]), 0.5 * (W[1][0] - W[0][1])};
+    const double w[3] = {0.5 * (W[2][1] - W[1][2]), 0.5 * (W[0][2] - W[2][0]),
+                         0.5 * (W[1][0] - W[0][1])};
     mat3 W2;
     const mat3 Wx = {{0, -w[2], w[1]}, {w[2], 0, -w[0]}, {-w[1], w[0], 0}};
     mat_mul(Wx, Wx, W2);
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) Q[i][j] -= W2[i][j];
-    const double al[3] = {0.5 * (Q[2][1] - Q[1][2]), 0.5 * (Q[0][2] - Q[2][0]), 0.5 * (Q[1][0] - Q[0][1])};
+    const double al[3] = {0.5 * (Q[2][1] - Q[1][2]), 0.5 * (Q[0][2] - Q[2][0]),
+                          0.5 * (Q[1][0] - Q[0][1])};
     double pdd_minus_g[3];
     for (int i = 0; i < 3; ++i) pdd_minus_g[i] = q[3 + i][2] - traj->gravity[i];
     for (int i = 0; i < 3; ++i) {
@@ -201,14 +208,16 @@ int loadid_synth_motion(const loadid_synth_traj_t *traj, double t, int still, lo
 }
 
 static void cross(const double a[3], const double b[3], double out[3]) {
-    const double r[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const double r[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                         a[0] * b[1] - a[1] * b[0]};
     memcpy(out, r, sizeof r);
 }
 
 void loadid_synth_wrench(const double phi[10], const loadid_motion_t *m, double wrench[6]) {
     const double mass = phi[0];
     const double h[3] = {phi[1], phi[2], phi[3]}; /* m c */
-    const double I[3][3] = {{phi[4], phi[5], phi[6]}, {phi[5], phi[7], phi[8]}, {phi[6], phi[8], phi[9]}};
+    const double I[3][3] = {
+        {phi[4], phi[5], phi[6]}, {phi[5], phi[7], phi[8]}, {phi[6], phi[8], phi[9]}};
     double t1[3], t2[3], Iw[3], Ia[3];
     /* Eq. (1): f = m (a - g) + alpha x (m c) + w x (w x (m c)). */
     cross(m->alpha, h, t1);
@@ -240,6 +249,7 @@ int loadid_synth_sample(const loadid_synth_traj_t *traj, const double phi[10], d
         out->meas.omega[i] += noise->sigma_omega * loadid_rng_normal(rng);
     }
     for (int i = 0; i < 6; ++i)
-        out->wrench_meas[i] += noise->offset[i] + (i < 3 ? noise->sigma_f : noise->sigma_tau) * loadid_rng_normal(rng);
+        out->wrench_meas[i] +=
+            noise->offset[i] + (i < 3 ? noise->sigma_f : noise->sigma_tau) * loadid_rng_normal(rng);
     return 0;
 }

@@ -28,28 +28,28 @@ typedef struct {
 } loadid_rng_t;
 
 void loadid_rng_seed(loadid_rng_t *rng, uint64_t seed);
-double loadid_rng_uniform(loadid_rng_t *rng);   /* [0, 1) */
-double loadid_rng_normal(loadid_rng_t *rng);    /* N(0, 1), Box-Muller */
+double loadid_rng_uniform(loadid_rng_t *rng); /* [0, 1) */
+double loadid_rng_normal(loadid_rng_t *rng);  /* N(0, 1), Box-Muller */
 
 #define LOADID_SYNTH_MAX_HARMONICS 8
 
 /* Six coordinates: 0-2 Euler angles psi (z), theta (y), phi (x) [rad];
  * 3-5 position of the origin of S in the base frame [m]. */
 typedef struct {
-    double base_freq;                                 /* f of eq. (10) [Hz] */
-    int harmonics;                                    /* N of eq. (10) */
-    double offset[6];                                 /* q_0 of eq. (11) */
-    double sin_coef[6][LOADID_SYNTH_MAX_HARMONICS];   /* rho_{i,k} */
-    double cos_coef[6][LOADID_SYNTH_MAX_HARMONICS];   /* delta_{i,k} */
-    double gravity[3];                                /* in the base frame [m/s^2] */
+    double base_freq;                               /* f of eq. (10) [Hz] */
+    int harmonics;                                  /* N of eq. (10) */
+    double offset[6];                               /* q_0 of eq. (11) */
+    double sin_coef[6][LOADID_SYNTH_MAX_HARMONICS]; /* rho_{i,k} */
+    double cos_coef[6][LOADID_SYNTH_MAX_HARMONICS]; /* delta_{i,k} */
+    double gravity[3];                              /* in the base frame [m/s^2] */
 } loadid_synth_traj_t;
 
 /* The true kinematic state of S at one instant, all in S. */
 typedef struct {
-    double spec[3];   /* a - g [m/s^2] */
-    double omega[3];  /* [rad/s] */
-    double alpha[3];  /* [rad/s^2] */
-    double g[3];      /* gravity in S [m/s^2] */
+    double spec[3];  /* a - g [m/s^2] */
+    double omega[3]; /* [rad/s] */
+    double alpha[3]; /* [rad/s^2] */
+    double g[3];     /* gravity in S [m/s^2] */
 } loadid_motion_t;
 
 /* A well-exciting default trajectory: base 0.4 Hz, 5 harmonics (highest
@@ -60,8 +60,7 @@ void loadid_synth_traj_default(loadid_synth_traj_t *traj, uint64_t seed);
 
 /* The state of S at time t [s]. still != 0 evaluates the pose q_0 at rest
  * (the zeroing pose). Returns 0, or -EINVAL for NULL pointers. */
-int loadid_synth_motion(const loadid_synth_traj_t *traj, double t, int still,
-                        loadid_motion_t *out);
+int loadid_synth_motion(const loadid_synth_traj_t *traj, double t, int still, loadid_motion_t *out);
 
 /* Eqs. (1)-(2): the wrench [f; tau] that a load with phi (eq. 5) exerts on
  * the sensor in the state m. */
@@ -70,19 +69,19 @@ void loadid_synth_wrench(const double phi[10], const loadid_motion_t *m, double 
 /* Noise of one synthetic measurement (standard deviations, white Gaussian)
  * and the sensor's constant offset. */
 typedef struct {
-    double sigma_f;      /* force [N] */
-    double sigma_tau;    /* torque [Nm] */
-    double sigma_spec;   /* a - g [m/s^2] */
-    double sigma_alpha;  /* angular acceleration [rad/s^2] */
-    double sigma_omega;  /* angular velocity [rad/s] */
-    double offset[6];    /* F/T offset [N, Nm] added to every wrench */
+    double sigma_f;     /* force [N] */
+    double sigma_tau;   /* torque [Nm] */
+    double sigma_spec;  /* a - g [m/s^2] */
+    double sigma_alpha; /* angular acceleration [rad/s^2] */
+    double sigma_omega; /* angular velocity [rad/s] */
+    double offset[6];   /* F/T offset [N, Nm] added to every wrench */
 } loadid_synth_noise_t;
 
 typedef struct {
-    loadid_motion_t truth;    /* exact state */
-    loadid_motion_t meas;     /* state with noise (g: exact) */
-    double wrench_true[6];    /* eqs. (1)-(2) of the exact state, no offset */
-    double wrench_meas[6];    /* plus offset and noise */
+    loadid_motion_t truth; /* exact state */
+    loadid_motion_t meas;  /* state with noise (g: exact) */
+    double wrench_true[6]; /* eqs. (1)-(2) of the exact state, no offset */
+    double wrench_meas[6]; /* plus offset and noise */
 } loadid_synth_sample_t;
 
 /* One measurement at time t of a load phi on trajectory traj. noise may be

@@ -9,7 +9,9 @@ double loadid_traj_duration(const loadid_fourier_traj_t *tr) {
     return 2 * tr->fade_s + tr->active_s;
 }
 
-double loadid_traj_active_start(const loadid_fourier_traj_t *tr) { return tr->fade_s; }
+double loadid_traj_active_start(const loadid_fourier_traj_t *tr) {
+    return tr->fade_s;
+}
 
 void loadid_traj_fade(double tau, double d[4]) {
     if (tau <= 0) {
@@ -23,7 +25,7 @@ void loadid_traj_fade(double tau, double d[4]) {
     }
     const double t2 = tau * tau, t3 = t2 * tau, u = 1 - tau;
     d[0] = t2 * t2 * (15 - 24 * tau + 10 * t2);
-    d[1] = 60 * t3 * u * u;                         /* 60 tau^3 - 120 tau^4 + 60 tau^5 */
+    d[1] = 60 * t3 * u * u; /* 60 tau^3 - 120 tau^4 + 60 tau^5 */
     d[2] = 180 * t2 - 480 * t3 + 300 * t2 * t2;
     d[3] = 360 * tau - 1440 * t2 + 1200 * t3;
 }
@@ -42,8 +44,8 @@ static void series(const loadid_fourier_traj_t *tr, int i, double ts, double s[4
     }
 }
 
-void loadid_traj_eval(const loadid_fourier_traj_t *tr, double t, double *q, double *qd,
-                      double *qdd, double *jerk) {
+void loadid_traj_eval(const loadid_fourier_traj_t *tr, double t, double *q, double *qd, double *qdd,
+                      double *jerk) {
     const double t1 = tr->fade_s, t2 = tr->fade_s + tr->active_s;
     /* The envelope e(t) and its time derivatives. */
     double e[4] = {1, 0, 0, 0};

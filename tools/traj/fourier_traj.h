@@ -30,10 +30,10 @@ extern "C" {
 
 typedef struct {
     int num_joints;
-    int harmonics;                /* N */
-    double base_frequency;        /* f [Hz] */
-    double active_s;              /* T_active = t_2 - t_1 */
-    double fade_s;                /* T_fade = t_1 - t_0 = t_3 - t_2 */
+    int harmonics;         /* N */
+    double base_frequency; /* f [Hz] */
+    double active_s;       /* T_active = t_2 - t_1 */
+    double fade_s;         /* T_fade = t_1 - t_0 = t_3 - t_2 */
     double q0[LOADID_MAX_JOINTS];
     double rho[LOADID_MAX_JOINTS][LOADID_TRAJ_MAX_HARMONICS];   /* sine */
     double delta[LOADID_MAX_JOINTS][LOADID_TRAJ_MAX_HARMONICS]; /* cosine */
@@ -47,8 +47,8 @@ double loadid_traj_active_start(const loadid_fourier_traj_t *tr);
 
 /* Joint positions, velocities, accelerations and jerks at time t (any
  * output may be NULL). Before 0 and after t_3 the robot rests at q_0. */
-void loadid_traj_eval(const loadid_fourier_traj_t *tr, double t, double *q, double *qd,
-                      double *qdd, double *jerk);
+void loadid_traj_eval(const loadid_fourier_traj_t *tr, double t, double *q, double *qd, double *qdd,
+                      double *jerk);
 
 /* The fade polynomial f(tau) and its first three derivatives in tau,
  * clamped to 0 below tau = 0 and 1 above tau = 1. */

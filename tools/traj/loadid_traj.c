@@ -69,7 +69,8 @@ static void make_limits(const loadid_config_t *cfg, const loadid_chain_t *chain,
         L->lower[i] = chain->joints[i].lower;
         L->upper[i] = chain->joints[i].upper;
         L->velocity[i] = chain->joints[i].velocity * cfg->traj_vel_scale;
-        L->acceleration[i] = cfg->traj_num_acc_limits ? cfg->traj_acc_limit[i] : cfg->traj_acc_limit[0];
+        L->acceleration[i] =
+            cfg->traj_num_acc_limits ? cfg->traj_acc_limit[i] : cfg->traj_acc_limit[0];
     }
     memcpy(L->ws_min, cfg->traj_workspace_min, sizeof L->ws_min);
     memcpy(L->ws_max, cfg->traj_workspace_max, sizeof L->ws_max);
@@ -89,26 +90,50 @@ int main(int argc, char **argv) {
     const char *config_path = NULL, *out_path = NULL, *setpoints_path = NULL;
     long seed = -1, mc = -1, cand = -1, evals = -1;
     int quiet = 0;
-    static const struct option opts[] = {
-        {"config", required_argument, NULL, 'c'},    {"out", required_argument, NULL, 'o'},
-        {"setpoints", required_argument, NULL, 's'}, {"seed", required_argument, NULL, 'S'},
-        {"monte-carlo", required_argument, NULL, 'm'}, {"candidates", required_argument, NULL, 'n'},
-        {"max-evals", required_argument, NULL, 'e'}, {"quiet", no_argument, NULL, 'q'},
-        {"help", no_argument, NULL, 'h'},            {NULL, 0, NULL, 0}};
+    static const struct option opts[] = {{"config", required_argument, NULL, 'c'},
+                                         {"out", required_argument, NULL, 'o'},
+                                         {"setpoints", required_argument, NULL, 's'},
+                                         {"seed", required_argument, NULL, 'S'},
+                                         {"monte-carlo", required_argument, NULL, 'm'},
+                                         {"candidates", required_argument, NULL, 'n'},
+                                         {"max-evals", required_argument, NULL, 'e'},
+                                         {"quiet", no_argument, NULL, 'q'},
+                                         {"help", no_argument, NULL, 'h'},
+                                         {NULL, 0, NULL, 0}};
     int c, which = 0;
     while ((c = getopt_long(argc, argv, "c:o:s:qh", opts, &which)) != -1) {
         int bad = 0;
         switch (c) {
-            case 'c': config_path = optarg; break;
-            case 'o': out_path = optarg; break;
-            case 's': setpoints_path = optarg; break;
-            case 'S': bad = parse_count(optarg, 0, 2147483647L, &seed); break;
-            case 'm': bad = parse_count(optarg, 1, 10000000L, &mc); break;
-            case 'n': bad = parse_count(optarg, 1, 1000, &cand); break;
-            case 'e': bad = parse_count(optarg, 0, 10000000L, &evals); break;
-            case 'q': quiet = 1; break;
-            case 'h': usage(stdout); return 0;
-            default: usage(stderr); return 2;
+            case 'c':
+                config_path = optarg;
+                break;
+            case 'o':
+                out_path = optarg;
+                break;
+            case 's':
+                setpoints_path = optarg;
+                break;
+            case 'S':
+                bad = parse_count(optarg, 0, 2147483647L, &seed);
+                break;
+            case 'm':
+                bad = parse_count(optarg, 1, 10000000L, &mc);
+                break;
+            case 'n':
+                bad = parse_count(optarg, 1, 1000, &cand);
+                break;
+            case 'e':
+                bad = parse_count(optarg, 0, 10000000L, &evals);
+                break;
+            case 'q':
+                quiet = 1;
+                break;
+            case 'h':
+                usage(stdout);
+                return 0;
+            default:
+                usage(stderr);
+                return 2;
         }
         if (bad) {
             fprintf(stderr, "%s: --%s: not a valid count: %s\n", prog, opts[which].name, optarg);
@@ -182,8 +207,9 @@ int main(int argc, char **argv) {
     loadid_traj_search_result_t res;
     int rc = loadid_traj_design(&p, &search, &tr, &res);
     if (rc == -ERANGE) {
-        fprintf(stderr, "%s: no trajectory within the limits found (%d Monte Carlo candidates); "
-                        "check trajectory.home, the workspace and the limits\n",
+        fprintf(stderr,
+                "%s: no trajectory within the limits found (%d Monte Carlo candidates); "
+                "check trajectory.home, the workspace and the limits\n",
                 prog, cfg.traj_monte_carlo);
         return 1;
     }
@@ -194,9 +220,14 @@ int main(int argc, char **argv) {
     const double kappa_design = loadid_traj_kappa(&p, &tr, 1000);
     loadid_traj_problem_t plain = p; /* the same data matrix without weights */
     loadid_est_config_default(LOADID_METHOD_RLS, n_params, &plain.est);
-    loadid_traj_file_info_t info = {cfg.robot_urdf, cfg.robot_base_link, cfg.robot_sensor_link,
-                                    &chain, kappa_design, res.kappa_monte_carlo,
-                                    loadid_traj_kappa(&plain, &tr, 1000), cfg.traj_seed};
+    loadid_traj_file_info_t info = {cfg.robot_urdf,
+                                    cfg.robot_base_link,
+                                    cfg.robot_sensor_link,
+                                    &chain,
+                                    kappa_design,
+                                    res.kappa_monte_carlo,
+                                    loadid_traj_kappa(&plain, &tr, 1000),
+                                    cfg.traj_seed};
     FILE *out = out_path ? fopen(out_path, "w") : stdout;
     if (!out || loadid_traj_file_write(out, &tr, &p.limits, &info) != 0 ||
         (out_path && fclose(out) != 0)) {
@@ -214,8 +245,8 @@ int main(int argc, char **argv) {
     fprintf(stderr,
             "%s: kappa_design %.4g (Monte Carlo start %.4g, %d of %d candidates within the limits, "
             "%d evaluations)\n",
-            prog, kappa_design, res.kappa_monte_carlo, res.feasible_candidates, cfg.traj_monte_carlo,
-            res.evaluations);
+            prog, kappa_design, res.kappa_monte_carlo, res.feasible_candidates,
+            cfg.traj_monte_carlo, res.evaluations);
     loadid_kin_destroy(kin);
     return 0;
 }

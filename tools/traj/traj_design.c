@@ -33,7 +33,9 @@ static int evaluator_open(evaluator_t *ev, const loadid_traj_problem_t *p) {
     return loadid_est_create(&cfg, &ev->est);
 }
 
-static void evaluator_close(evaluator_t *ev) { loadid_est_destroy(ev->est); }
+static void evaluator_close(evaluator_t *ev) {
+    loadid_est_destroy(ev->est);
+}
 
 static void to_real(const double *in, loadid_real_t *out, int n) {
     for (int i = 0; i < n; ++i) out[i] = (loadid_real_t)in[i];
@@ -125,8 +127,9 @@ int loadid_traj_check(const loadid_traj_problem_t *p, const loadid_fourier_traj_
             continue;
         }
         for (int a = 0; a < 3; ++a) {
-            worse(&w, fmax(L->ws_min[a] + ws_margin - st.position[a],
-                           st.position[a] - (L->ws_max[a] - ws_margin)),
+            worse(&w,
+                  fmax(L->ws_min[a] + ws_margin - st.position[a],
+                       st.position[a] - (L->ws_max[a] - ws_margin)),
                   "workspace", a, t);
         }
         worse(&w, L->floor_z + ws_margin - st.position[2], "floor", 2, t);
@@ -142,7 +145,7 @@ int loadid_traj_check(const loadid_traj_problem_t *p, const loadid_fourier_traj_
 typedef struct {
     const loadid_traj_problem_t *p;
     const loadid_traj_search_t *s;
-    loadid_fourier_traj_t base;   /* template: sizes, times, q0 */
+    loadid_fourier_traj_t base; /* template: sizes, times, q0 */
     int nx;
     double *lb, *ub;
     evaluator_t ev;
@@ -235,8 +238,7 @@ static double nlopt_objective(unsigned nx, const double *x, double *grad, void *
     int feasible;
     const double k = objective(S, x, &feasible);
     /* (a candidate's last evaluation: reported at its end, below) */
-    if (S->s->progress && ++S->opt_evals % PROGRESS_EVALS == 0 &&
-        S->opt_evals < S->s->max_evals)
+    if (S->s->progress && ++S->opt_evals % PROGRESS_EVALS == 0 && S->opt_evals < S->s->max_evals)
         S->s->progress(S->s->progress_ctx, "optimise", S->opt_done + S->opt_evals, S->opt_total,
                        S->best_kappa);
     return log(k);

@@ -29,32 +29,32 @@ extern "C" {
 typedef struct {
     int num_joints;
     double lower[LOADID_MAX_JOINTS], upper[LOADID_MAX_JOINTS]; /* position */
-    double velocity[LOADID_MAX_JOINTS];                         /* |qd| max */
-    double acceleration[LOADID_MAX_JOINTS];                     /* |qdd| max */
-    double ws_min[3], ws_max[3];  /* box for the origin of S, base frame [m] */
-    double floor_z;               /* origin of S must keep z >= floor_z [m]
+    double velocity[LOADID_MAX_JOINTS];                        /* |qd| max */
+    double acceleration[LOADID_MAX_JOINTS];                    /* |qdd| max */
+    double ws_min[3], ws_max[3]; /* box for the origin of S, base frame [m] */
+    double floor_z;              /* origin of S must keep z >= floor_z [m]
                                      (clearance included) */
 } loadid_traj_limits_t;
 
 /* Which limit is broken the most, and where. */
 typedef struct {
-    double excess;                /* > 0: by how much, relative to the limit
+    double excess;    /* > 0: by how much, relative to the limit
                                      (workspace: in metres); <= 0: all met */
-    const char *what;             /* "position", "velocity", "acceleration",
+    const char *what; /* "position", "velocity", "acceleration",
                                      "workspace", "floor" */
-    int joint;                    /* joint index, or axis for workspace */
-    double t;                     /* time [s] */
+    int joint;        /* joint index, or axis for workspace */
+    double t;         /* time [s] */
 } loadid_traj_violation_t;
 
 typedef struct {
-    const loadid_kin_t *kin;      /* the robot (not owned) */
+    const loadid_kin_t *kin; /* the robot (not owned) */
     loadid_traj_limits_t limits;
-    loadid_est_config_t est;      /* weights and n_params of the estimator
+    loadid_est_config_t est; /* weights and n_params of the estimator
                                      (method is ignored: RLS is used) */
-    int zeroing;                  /* 1: eqs. 7-9 with g_init at q_0 (n_params 10) */
-    double objective_hz;          /* sampling of the objective, default 100 */
-    double constraint_hz;         /* sampling of the constraints, default 200 */
-    double margin;                /* limits shrunk by this fraction while
+    int zeroing;             /* 1: eqs. 7-9 with g_init at q_0 (n_params 10) */
+    double objective_hz;     /* sampling of the objective, default 100 */
+    double constraint_hz;    /* sampling of the constraints, default 200 */
+    double margin;           /* limits shrunk by this fraction while
                                      optimising, default 0.02 */
 } loadid_traj_problem_t;
 
@@ -73,11 +73,11 @@ int loadid_traj_check(const loadid_traj_problem_t *p, const loadid_fourier_traj_
                       double rate_hz, double shrink, loadid_traj_violation_t *worst);
 
 typedef struct {
-    int monte_carlo;              /* random candidates */
-    int candidates;               /* best ones refined by NLopt */
-    int max_evals;                /* NLopt evaluations per candidate */
+    int monte_carlo; /* random candidates */
+    int candidates;  /* best ones refined by NLopt */
+    int max_evals;   /* NLopt evaluations per candidate */
     uint64_t seed;
-    int optimise_home;            /* 0: keep tr->q0 as given; 1: optimise q0 too */
+    int optimise_home; /* 0: keep tr->q0 as given; 1: optimise q0 too */
     /* Progress (may be NULL): stage "monte-carlo" (candidates, every 100)
      * or "optimise" (NLopt's evaluations over all candidates, every 100,
      * and at each candidate's end: done = its whole budget), done/total. */
@@ -86,10 +86,10 @@ typedef struct {
 } loadid_traj_search_t;
 
 typedef struct {
-    double kappa_monte_carlo;     /* best feasible kappa of the Monte Carlo stage */
-    double kappa_optimised;       /* the result's kappa at objective_hz */
-    int evaluations;              /* objective evaluations in total */
-    int feasible_candidates;      /* Monte Carlo candidates within the limits */
+    double kappa_monte_carlo; /* best feasible kappa of the Monte Carlo stage */
+    double kappa_optimised;   /* the result's kappa at objective_hz */
+    int evaluations;          /* objective evaluations in total */
+    int feasible_candidates;  /* Monte Carlo candidates within the limits */
 } loadid_traj_search_result_t;
 
 /* Designs a trajectory: tr holds the template on entry (num_joints,

@@ -39,7 +39,8 @@ int loadid_traj_file_write(FILE *out, const loadid_fourier_traj_t *tr,
     fprintf(out, "format: loadid-trajectory-1\n");
     fprintf(out, "robot:\n  urdf: \"%s\"\n  base_link: \"%s\"\n  sensor_link: \"%s\"\n  joints: [",
             info->urdf, info->base_link, info->sensor_link);
-    for (int i = 0; i < n; ++i) fprintf(out, "%s\"%s\"", i ? ", " : "", info->chain->joints[i].name);
+    for (int i = 0; i < n; ++i)
+        fprintf(out, "%s\"%s\"", i ? ", " : "", info->chain->joints[i].name);
     fprintf(out, "]\n");
     fprintf(out, "base_frequency: %.17g\nharmonics: %d\nactive_s: %.17g\nfade_s: %.17g\n",
             tr->base_frequency, tr->harmonics, tr->active_s, tr->fade_s);
@@ -62,8 +63,9 @@ int loadid_traj_file_write(FILE *out, const loadid_fourier_traj_t *tr,
     key_list(out, "  ", "workspace_max", limits->ws_max, 3);
     fprintf(out, "  floor_z: ");
     number(out, limits->floor_z);
-    fprintf(out, "\nkappa_design: %.17g\nkappa_upsilon: %.17g\nkappa_set: %.17g\n"
-                 "kappa_monte_carlo: %.17g\n",
+    fprintf(out,
+            "\nkappa_design: %.17g\nkappa_upsilon: %.17g\nkappa_set: %.17g\n"
+            "kappa_monte_carlo: %.17g\n",
             info->kappa_design, info->kappa_design * info->kappa_design, info->kappa_set,
             info->kappa_monte_carlo);
     fprintf(out, "seed: %llu\n", (unsigned long long)info->seed);
@@ -101,8 +103,8 @@ static int read_rows(loadid_yaml_node_t *root, const char *key, int n, int h,
         return loadid_yaml_fail(seq, "expected %d rows (one per joint), got %zu", n,
                                 loadid_yaml_count(seq));
     for (int i = 0; i < n; ++i) {
-        rc = loadid_yaml_as_doubles(loadid_yaml_item(seq, (size_t)i), rows[i], (size_t)h,
-                                    (size_t)h, NULL);
+        rc = loadid_yaml_as_doubles(loadid_yaml_item(seq, (size_t)i), rows[i], (size_t)h, (size_t)h,
+                                    NULL);
         if (rc < 0) return rc;
     }
     return 0;
@@ -119,7 +121,8 @@ static int read_doc(loadid_yaml_doc_t *doc, loadid_fourier_traj_t *tr,
     if (!root || loadid_yaml_kind(root) != LOADID_YAML_MAPPING)
         return root ? loadid_yaml_fail(root, "expected a mapping") : -EINVAL;
     char format[64];
-    int rc = required(loadid_yaml_get_string(root, "format", format, sizeof format), root, "format");
+    int rc =
+        required(loadid_yaml_get_string(root, "format", format, sizeof format), root, "format");
     if (rc) return rc;
     if (strcmp(format, "loadid-trajectory-1") != 0)
         return loadid_yaml_fail(loadid_yaml_get(root, "format"),
@@ -127,15 +130,17 @@ static int read_doc(loadid_yaml_doc_t *doc, loadid_fourier_traj_t *tr,
     memset(tr, 0, sizeof *tr);
     double q0[LOADID_MAX_JOINTS];
     size_t n = 0;
-    if ((rc = required(loadid_yaml_get_double_seq(root, "q0", q0, 1, LOADID_MAX_JOINTS, &n),
-                       root, "q0")))
+    if ((rc = required(loadid_yaml_get_double_seq(root, "q0", q0, 1, LOADID_MAX_JOINTS, &n), root,
+                       "q0")))
         return rc;
     tr->num_joints = (int)n;
     memcpy(tr->q0, q0, sizeof q0);
     if ((rc = required(loadid_yaml_get_double(root, "base_frequency", &tr->base_frequency), root,
                        "base_frequency")) ||
-        (rc = required(loadid_yaml_get_int(root, "harmonics", &tr->harmonics), root, "harmonics")) ||
-        (rc = required(loadid_yaml_get_double(root, "active_s", &tr->active_s), root, "active_s")) ||
+        (rc =
+             required(loadid_yaml_get_int(root, "harmonics", &tr->harmonics), root, "harmonics")) ||
+        (rc =
+             required(loadid_yaml_get_double(root, "active_s", &tr->active_s), root, "active_s")) ||
         (rc = required(loadid_yaml_get_double(root, "fade_s", &tr->fade_s), root, "fade_s")))
         return rc;
     if (tr->harmonics < 1 || tr->harmonics > LOADID_TRAJ_MAX_HARMONICS)
@@ -159,7 +164,8 @@ static int read_doc(loadid_yaml_doc_t *doc, loadid_fourier_traj_t *tr,
             return loadid_yaml_fail(joints, "expected %zu joint names (as q0), got %zu", n,
                                     loadid_yaml_count(joints));
         for (size_t i = 0; i < n; ++i)
-            if ((rc = loadid_yaml_as_string(loadid_yaml_item(joints, i), names[i], LOADID_NAME_MAX)))
+            if ((rc =
+                     loadid_yaml_as_string(loadid_yaml_item(joints, i), names[i], LOADID_NAME_MAX)))
                 return rc;
     }
     return 0;

@@ -40,16 +40,15 @@ extern "C" {
 
 typedef struct {
     const char *urdf, *base_link, *sensor_link;
-    const loadid_chain_t *chain;  /* joint names */
+    const loadid_chain_t *chain;            /* joint names */
     double kappa_design, kappa_monte_carlo; /* kappa(D A T) */
-    double kappa_set;             /* kappa of A without weights (Table I) */
+    double kappa_set;                       /* kappa of A without weights (Table I) */
     uint64_t seed;
 } loadid_traj_file_info_t;
 
 /* Writes the YAML. Returns 0 or -1 (errno set by stdio). */
 int loadid_traj_file_write(FILE *out, const loadid_fourier_traj_t *tr,
-                           const loadid_traj_limits_t *limits,
-                           const loadid_traj_file_info_t *info);
+                           const loadid_traj_limits_t *limits, const loadid_traj_file_info_t *info);
 
 /* Reads a trajectory file: the series and fades into tr, the joint names
  * into names (LOADID_MAX_JOINTS x LOADID_NAME_MAX, may be NULL), kappa_design

@@ -33,7 +33,8 @@ extern "C" {
 #endif
 
 #define LOADID_CANDUMP_IFNAME_MAX 16 /* IFNAMSIZ: at most 15 characters + NUL */
-#define LOADID_CANDUMP_LINE_MAX 128  /* longest line the reader accepts, with
+#define LOADID_CANDUMP_LINE_MAX \
+    128 /* longest line the reader accepts, with
                                         its newline (a classic frame with a
                                         20-digit time needs about 70) */
 

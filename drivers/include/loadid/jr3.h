@@ -46,17 +46,17 @@ extern "C" {
 #define LOADID_JR3_DEFAULT_BASE_ID 0x1A0u /* can.base_id */
 #define LOADID_JR3_MAX_BASE_ID 0x7FBu     /* base+4 must stay an 11-bit id */
 #define LOADID_JR3_NUM_GROUPS 4
-#define LOADID_JR3_NUM_FRAMES 5           /* base+0 .. base+4 */
+#define LOADID_JR3_NUM_FRAMES 5                  /* base+0 .. base+4 */
 #define LOADID_JR3_COUNTS_PER_FULL_SCALE 16384.0 /* value = counts * fs / 16384 */
 
 /* Groups: index into the [4][3] arrays below, and id offset from base. */
 enum loadid_jr3_group {
-    LOADID_JR3_FORCE = 0,   /* f [N] */
-    LOADID_JR3_MOMENT = 1,  /* tau [N m] */
-    LOADID_JR3_LINEAR = 2,  /* a - g of the origin of S [m/s^2] */
-    LOADID_JR3_ANGULAR = 3  /* alpha [rad/s^2] */
+    LOADID_JR3_FORCE = 0,  /* f [N] */
+    LOADID_JR3_MOMENT = 1, /* tau [N m] */
+    LOADID_JR3_LINEAR = 2, /* a - g of the origin of S [m/s^2] */
+    LOADID_JR3_ANGULAR = 3 /* alpha [rad/s^2] */
 };
-#define LOADID_JR3_FULL_SCALE_OFFSET 4    /* base+4: the full-scale frame */
+#define LOADID_JR3_FULL_SCALE_OFFSET 4 /* base+4: the full-scale frame */
 
 /* Status byte (byte 7 of base+0..3). */
 #define LOADID_JR3_STATUS_SATURATED 0x01u /* a channel of this group saturated */
@@ -68,11 +68,11 @@ enum loadid_jr3_group {
 
 /* Results of loadid_jr3_decoder_feed (non-negative). */
 enum loadid_jr3_result {
-    LOADID_JR3_NONE = 0,        /* frame taken; nothing to hand on */
-    LOADID_JR3_SAMPLE = 1,      /* out->sample is a complete, usable sample:
+    LOADID_JR3_NONE = 0,      /* frame taken; nothing to hand on */
+    LOADID_JR3_SAMPLE = 1,    /* out->sample is a complete, usable sample:
                                    the ONLY result after which a sample may
                                    go to an estimator */
-    LOADID_JR3_FULL_SCALE = 2   /* a base+4 frame changed a group's full
+    LOADID_JR3_FULL_SCALE = 2 /* a base+4 frame changed a group's full
                                    scale: out->full_scale says which (log it) */
 };
 
@@ -97,7 +97,7 @@ enum loadid_jr3_error {
 
 /* Configuration (immutable after create). */
 typedef struct {
-    uint32_t base_id;            /* can.base_id; default 0x1A0; <= 0x7FB */
+    uint32_t base_id; /* can.base_id; default 0x1A0; <= 0x7FB */
     double full_scale[LOADID_JR3_NUM_GROUPS][3];
     /* jr3.full_scale.{force,moment,linear,angular}, X Y Z; > 0 and finite.
      * Defaults (the paper's 85M35A3-I40-D 200N12): 200 N, 12 N m,
@@ -106,11 +106,11 @@ typedef struct {
 
 /* One decoded sample. */
 typedef struct {
-    int64_t t_us;               /* receive time of its base+0 frame [us] */
-    uint8_t sequence;           /* byte 6 of its frames */
-    uint8_t status[LOADID_JR3_NUM_GROUPS]; /* byte 7 of each group's frame */
-    bool saturated;             /* bit 0 in some group */
-    bool faulty;                /* bit 1 in some group */
+    int64_t t_us;                             /* receive time of its base+0 frame [us] */
+    uint8_t sequence;                         /* byte 6 of its frames */
+    uint8_t status[LOADID_JR3_NUM_GROUPS];    /* byte 7 of each group's frame */
+    bool saturated;                           /* bit 0 in some group */
+    bool faulty;                              /* bit 1 in some group */
     int16_t counts[LOADID_JR3_NUM_GROUPS][3]; /* raw counts X Y Z */
     double value[LOADID_JR3_NUM_GROUPS][3];
     /* SI: counts * full_scale / 16384 with the full scale in force when the
@@ -120,10 +120,10 @@ typedef struct {
 
 /* A full-scale change made by a base+4 frame. */
 typedef struct {
-    int group;                  /* enum loadid_jr3_group */
-    double previous[3];         /* X Y Z before [SI] */
-    double current[3];          /* X Y Z now in force [SI] */
-    int64_t t_us;               /* receive time of the base+4 frame */
+    int group;          /* enum loadid_jr3_group */
+    double previous[3]; /* X Y Z before [SI] */
+    double current[3];  /* X Y Z now in force [SI] */
+    int64_t t_us;       /* receive time of the base+4 frame */
 } loadid_jr3_full_scale_change_t;
 
 /* What loadid_jr3_decoder_feed hands back; which member it wrote depends on
@@ -187,8 +187,7 @@ int loadid_jr3_config_check(const loadid_jr3_config_t *cfg);
  * Returns the mask of saturated groups (bit g = group g, 0..15);
  * -EINVAL for NULL arguments, an invalid cfg, a NaN value or fault_groups
  * above 15 (frames unchanged then). +-Inf saturates. */
-int loadid_jr3_encode(const loadid_jr3_config_t *cfg,
-                      const double value[LOADID_JR3_NUM_GROUPS][3],
+int loadid_jr3_encode(const loadid_jr3_config_t *cfg, const double value[LOADID_JR3_NUM_GROUPS][3],
                       uint8_t sequence, unsigned fault_groups, int64_t t_us,
                       loadid_can_frame_t frames[LOADID_JR3_NUM_GROUPS]);
 
@@ -199,9 +198,8 @@ int loadid_jr3_encode(const loadid_jr3_config_t *cfg,
  * apply. Returns 0; -EINVAL for NULL frame or fs, base_id > 0x7FB, a group
  * outside 0..3 or a non-finite full scale; LOADID_JR3_E_RANGE when a full
  * scale rounds to 0 or above 65535 units. */
-int loadid_jr3_encode_full_scale(uint32_t base_id, int group, const double fs[3],
-                                 int64_t t_us, loadid_can_frame_t *frame,
-                                 double sent[3]);
+int loadid_jr3_encode_full_scale(uint32_t base_id, int group, const double fs[3], int64_t t_us,
+                                 loadid_can_frame_t *frame, double sent[3]);
 
 /* ---- Decoder ----------------------------------------------------------- */
 

@@ -40,42 +40,42 @@ extern "C" {
 #endif
 
 #define LOADID_EVENTLOG_SYNC 0xEDA1DA01u
-#define LOADID_EVENTLOG_HEADER 28          /* bytes before the channel */
-#define LOADID_EVENTLOG_CHANNEL_MAX 256    /* longest channel name [bytes] */
+#define LOADID_EVENTLOG_HEADER 28       /* bytes before the channel */
+#define LOADID_EVENTLOG_CHANNEL_MAX 256 /* longest channel name [bytes] */
 /* The default data_max [bytes]: far above loadid's largest message
  * (LOADID_LCM_ESTIMATE_MAX, under 400 bytes), so that a log recorded with
  * other channels (loadid-record --all-channels) reads too. */
 #define LOADID_EVENTLOG_DATA_MAX (1u << 20)
-#define LOADID_EVENTLOG_PROBLEM_MAX 200    /* room of a problem's text */
+#define LOADID_EVENTLOG_PROBLEM_MAX 200 /* room of a problem's text */
 
 enum loadid_eventlog_error {
-    LOADID_EVENTLOG_E_NOT_LOG = -1301,     /* not an LCM log: byte 0 is not the
+    LOADID_EVENTLOG_E_NOT_LOG = -1301, /* not an LCM log: byte 0 is not the
                                               sync word, and no plausible event
                                               is anywhere in the file */
-    LOADID_EVENTLOG_E_SEEK = -1302         /* open: the file is not seekable */
+    LOADID_EVENTLOG_E_SEEK = -1302     /* open: the file is not seekable */
 };
 
 typedef struct {
-    int64_t eventnum;         /* as lcm-logger numbered it (not checked) */
-    int64_t timestamp;        /* [us] the time lcm-logger received it */
-    const char *channel;      /* NUL-terminated; valid until the next call */
-    int32_t channel_len;      /* 1 .. LOADID_EVENTLOG_CHANNEL_MAX */
-    const uint8_t *data;      /* valid until the next call */
-    int32_t data_len;         /* 0 .. data_max */
-    int64_t offset;           /* byte offset of its sync word in the file */
+    int64_t eventnum;    /* as lcm-logger numbered it (not checked) */
+    int64_t timestamp;   /* [us] the time lcm-logger received it */
+    const char *channel; /* NUL-terminated; valid until the next call */
+    int32_t channel_len; /* 1 .. LOADID_EVENTLOG_CHANNEL_MAX */
+    const uint8_t *data; /* valid until the next call */
+    int32_t data_len;    /* 0 .. data_max */
+    int64_t offset;      /* byte offset of its sync word in the file */
 } loadid_eventlog_event_t;
 
 typedef struct {
-    int64_t size;             /* the file's size [bytes] */
-    int64_t events;           /* events handed out */
-    int64_t oversized;        /* plausible events with more than data_max
+    int64_t size;          /* the file's size [bytes] */
+    int64_t events;        /* events handed out */
+    int64_t oversized;     /* plausible events with more than data_max
                                  bytes of data, passed over */
-    int64_t damaged;          /* places where the bytes were not an event
+    int64_t damaged;       /* places where the bytes were not an event
                                  (a wrong sync word, an implausible or
                                  damaged header), each searched past */
-    int64_t skipped_bytes;    /* bytes passed over in those searches */
-    int truncated;            /* 1: the file ends inside its last event */
-    int64_t truncated_at;     /* that event's offset, else -1 */
+    int64_t skipped_bytes; /* bytes passed over in those searches */
+    int truncated;         /* 1: the file ends inside its last event */
+    int64_t truncated_at;  /* that event's offset, else -1 */
     char first_problem[LOADID_EVENTLOG_PROBLEM_MAX];
     /* The first damage, truncation or failed search, e.g. "byte 1234: data
      * length 2147483647 in the event header runs past the end of the file;

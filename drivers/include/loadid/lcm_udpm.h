@@ -33,10 +33,10 @@ extern "C" {
 #define LOADID_LCM_CHANNEL_MAX 63 /* LCM_MAX_CHANNEL_NAME_LENGTH */
 
 typedef struct {
-    uint8_t group[4];       /* IPv4 multicast group, network order */
-    uint16_t port;          /* UDP port */
-    int recv_buf_size;      /* [bytes] SO_RCVBUF from ?recv_buf_size=, 0: the default */
-    int ttl;                /* IP_MULTICAST_TTL from ?ttl=, 0..255; default 0 (as liblcm):
+    uint8_t group[4];  /* IPv4 multicast group, network order */
+    uint16_t port;     /* UDP port */
+    int recv_buf_size; /* [bytes] SO_RCVBUF from ?recv_buf_size=, 0: the default */
+    int ttl;           /* IP_MULTICAST_TTL from ?ttl=, 0..255; default 0 (as liblcm):
                              * packets stay on this host */
 } loadid_lcm_udpm_url_t;
 
@@ -45,7 +45,7 @@ typedef struct {
     int fd;
     uint8_t group[4];
     uint16_t port;
-    uint32_t seqno;         /* sequence number of the next message */
+    uint32_t seqno; /* sequence number of the next message */
 } loadid_lcm_udpm_tx_t;
 
 /* LCM's largest short message: channel, NUL and payload [bytes]. */
@@ -82,8 +82,8 @@ int loadid_lcm_udpm_read_from(int fd, uint8_t *buf, size_t cap, uint32_t *source
 /* A sending socket for the group (IP_MULTICAST_TTL ttl, IP_MULTICAST_LOOP
  * on, as liblcm's: peers on this host receive). Returns 0, or -errno with
  * a reason in err. */
-int loadid_lcm_udpm_open_tx(const loadid_lcm_udpm_url_t *url, loadid_lcm_udpm_tx_t *tx,
-                            char *err, size_t errlen);
+int loadid_lcm_udpm_open_tx(const loadid_lcm_udpm_url_t *url, loadid_lcm_udpm_tx_t *tx, char *err,
+                            size_t errlen);
 
 /* Sends one message as a short LCM message (one datagram: the same bytes
  * as liblcm's lcm_publish, whose sequence numbers also count from 0).

@@ -47,14 +47,14 @@ extern "C" {
 
 /* Return codes (-1401.., loadid/error_text.h; loadid_lcm_strerror). */
 enum {
-    LOADID_LCM_NONFINITE = 1,       /* decoded; a double is NaN or infinite */
-    LOADID_LCM_ESHORT = -1401,      /* buffer ends inside the message */
-    LOADID_LCM_ELONG = -1402,       /* bytes after the message */
-    LOADID_LCM_EFINGERPRINT = -1403,/* another type (or another version of it) */
-    LOADID_LCM_ECOUNT = -1404,      /* num_joints outside 1..LOADID_LCM_MAX_JOINTS */
-    LOADID_LCM_ESTRING = -1405,     /* string length, NUL terminator or NUL inside */
-    LOADID_LCM_ENOSPC = -1406,      /* encode: the buffer is too small */
-    LOADID_LCM_EINVAL = -1407       /* encode: a field out of range (count, name) */
+    LOADID_LCM_NONFINITE = 1,        /* decoded; a double is NaN or infinite */
+    LOADID_LCM_ESHORT = -1401,       /* buffer ends inside the message */
+    LOADID_LCM_ELONG = -1402,        /* bytes after the message */
+    LOADID_LCM_EFINGERPRINT = -1403, /* another type (or another version of it) */
+    LOADID_LCM_ECOUNT = -1404,       /* num_joints outside 1..LOADID_LCM_MAX_JOINTS */
+    LOADID_LCM_ESTRING = -1405,      /* string length, NUL terminator or NUL inside */
+    LOADID_LCM_ENOSPC = -1406,       /* encode: the buffer is too small */
+    LOADID_LCM_EINVAL = -1407        /* encode: a field out of range (count, name) */
 };
 
 typedef enum {
@@ -67,42 +67,42 @@ typedef enum {
 } loadid_lcm_type_t;
 
 typedef struct {
-    int64_t utime;                /* [us] sample time */
-    int32_t num_joints;           /* 1 .. LOADID_LCM_MAX_JOINTS */
+    int64_t utime;                          /* [us] sample time */
+    int32_t num_joints;                     /* 1 .. LOADID_LCM_MAX_JOINTS */
     double position[LOADID_LCM_MAX_JOINTS]; /* [rad or m], num_joints used */
     double setpoint[LOADID_LCM_MAX_JOINTS]; /* [rad or m], num_joints used */
 } loadid_lcm_joint_state_t;
 
 typedef struct {
-    int64_t utime;                /* [us] */
-    int8_t action;                /* ZERO 1, START 2, STOP 3, RESET 4 */
+    int64_t utime; /* [us] */
+    int8_t action; /* ZERO 1, START 2, STOP 3, RESET 4 */
     char load_name[LOADID_LCM_NAME_MAX];
 } loadid_lcm_command_t;
 
 typedef struct {
-    int64_t utime;                /* [us] newest sample used */
+    int64_t utime; /* [us] newest sample used */
     int64_t samples;
-    int8_t method;                /* RLS 1, RIV 2, RTLS 3, LS_BATCH 4, TLS_BATCH 5 */
-    int8_t state;                 /* IDLE 0 .. FAILED 4 */
+    int8_t method; /* RLS 1, RIV 2, RTLS 3, LS_BATCH 4, TLS_BATCH 5 */
+    int8_t state;  /* IDLE 0 .. FAILED 4 */
     char load_name[LOADID_LCM_NAME_MAX];
-    double phi[10];               /* eq. (5) [kg, kg m, kg m^2] */
-    double offset[6];             /* [N, N m] */
-    double mass;                  /* [kg] */
-    double com[3];                /* [m] */
-    double inertia_com[6];        /* [kg m^2] */
+    double phi[10];        /* eq. (5) [kg, kg m, kg m^2] */
+    double offset[6];      /* [N, N m] */
+    double mass;           /* [kg] */
+    double com[3];         /* [m] */
+    double inertia_com[6]; /* [kg m^2] */
     double condition_number;
     double sigma_min;
     int8_t physically_consistent; /* LCM boolean: 0 or 1 (any non-zero decoded as is) */
 } loadid_lcm_estimate_t;
 
 typedef struct {
-    int64_t utime;                /* [us] */
-    double force[3];              /* [N] */
-    double torque[3];             /* [N m] */
+    int64_t utime;    /* [us] */
+    double force[3];  /* [N] */
+    double torque[3]; /* [N m] */
 } loadid_lcm_wrench_t;
 
 typedef struct {
-    int64_t utime;                /* [us] */
+    int64_t utime; /* [us] */
     int8_t state;
     int64_t samples_ok, frames_bad, samples_incomplete, samples_saturated, sequence_gaps,
         joint_msgs_bad;
@@ -111,16 +111,16 @@ typedef struct {
 
 /* load_model_t, channel LOADID_MODEL: the load a controller should use. */
 typedef struct {
-    int64_t utime;                /* [us] newest sample used */
-    int8_t method;                /* the estimate it was made from: RLS 1 .. REFINED 6 */
+    int64_t utime; /* [us] newest sample used */
+    int8_t method; /* the estimate it was made from: RLS 1 .. REFINED 6 */
     char load_name[LOADID_LCM_NAME_MAX];
-    int8_t identified;            /* bits MASS 1 | COM 2 | INERTIA 4: the groups determined */
-    int8_t projected;             /* LCM boolean: phi differs from the method's estimate */
-    double phi[10];               /* eq. (5), physically consistent [kg, kg m, kg m^2] */
-    double phi_std[10];           /* one standard deviation of the estimate's elements */
-    double mass;                  /* [kg] */
-    double com[3];                /* [m], in S */
-    double inertia_com[6];        /* [kg m^2] about the COM, axes of S */
+    int8_t identified;     /* bits MASS 1 | COM 2 | INERTIA 4: the groups determined */
+    int8_t projected;      /* LCM boolean: phi differs from the method's estimate */
+    double phi[10];        /* eq. (5), physically consistent [kg, kg m, kg m^2] */
+    double phi_std[10];    /* one standard deviation of the estimate's elements */
+    double mass;           /* [kg] */
+    double com[3];         /* [m], in S */
+    double inertia_com[6]; /* [kg m^2] about the COM, axes of S */
 } loadid_lcm_load_model_t;
 
 /* The type's 8-byte fingerprint as lcm-gen computes it (the first 8 bytes

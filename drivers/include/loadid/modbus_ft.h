@@ -35,14 +35,14 @@ extern "C" {
 
 /* ---- The register map (proto/modbus_ft.md) ------------------------------ */
 
-#define LOADID_MODBUS_FT_INPUT_ADDR 0      /* first input register of a sample */
-#define LOADID_MODBUS_FT_INPUT_COUNT 8     /* Fx Fy Fz Tx Ty Tz status counter */
+#define LOADID_MODBUS_FT_INPUT_ADDR 0  /* first input register of a sample */
+#define LOADID_MODBUS_FT_INPUT_COUNT 8 /* Fx Fy Fz Tx Ty Tz status counter */
 #define LOADID_MODBUS_FT_REG_STATUS 6
 #define LOADID_MODBUS_FT_REG_COUNTER 7
-#define LOADID_MODBUS_FT_HOLDING_ADDR 0    /* first full-scale holding register */
-#define LOADID_MODBUS_FT_HOLDING_COUNT 6   /* fs Fx Fy Fz [0.1 N], Tx Ty Tz [0.01 N m] */
-#define LOADID_MODBUS_FT_FORCE_UNIT 0.1    /* N per holding-register unit */
-#define LOADID_MODBUS_FT_MOMENT_UNIT 0.01  /* N m per holding-register unit */
+#define LOADID_MODBUS_FT_HOLDING_ADDR 0   /* first full-scale holding register */
+#define LOADID_MODBUS_FT_HOLDING_COUNT 6  /* fs Fx Fy Fz [0.1 N], Tx Ty Tz [0.01 N m] */
+#define LOADID_MODBUS_FT_FORCE_UNIT 0.1   /* N per holding-register unit */
+#define LOADID_MODBUS_FT_MOMENT_UNIT 0.01 /* N m per holding-register unit */
 #define LOADID_MODBUS_FT_COUNTS_PER_FULL_SCALE 16384.0
 
 #define LOADID_MODBUS_FT_STATUS_SATURATED 0x0001u
@@ -54,10 +54,10 @@ extern "C" {
 
 /* Results (non-negative). */
 enum loadid_modbus_ft_result {
-    LOADID_MODBUS_FT_SAMPLE = 1,       /* out is a new, usable sample: the ONLY
+    LOADID_MODBUS_FT_SAMPLE = 1,    /* out is a new, usable sample: the ONLY
                                           result after which a sample may go
                                           to an estimator */
-    LOADID_MODBUS_FT_FULL_SCALE = 2    /* full scales taken from the registers */
+    LOADID_MODBUS_FT_FULL_SCALE = 2 /* full scales taken from the registers */
 };
 
 /* Errors (negative). The first two come with a decoded sample in *out that
@@ -81,14 +81,14 @@ enum loadid_modbus_ft_error {
 
 /* One decoded sample. */
 typedef struct {
-    int64_t t_us;               /* time of the response [us since the epoch] */
-    uint16_t counter;           /* input register 7 */
-    uint16_t status;            /* input register 6 */
-    bool saturated;             /* status bit 0 */
-    bool faulty;                /* status bit 1 */
-    int16_t counts[6];          /* Fx Fy Fz Tx Ty Tz */
-    double force[3];            /* counts * fs / 16384 [N] */
-    double torque[3];           /* counts * fs / 16384 [N m] */
+    int64_t t_us;      /* time of the response [us since the epoch] */
+    uint16_t counter;  /* input register 7 */
+    uint16_t status;   /* input register 6 */
+    bool saturated;    /* status bit 0 */
+    bool faulty;       /* status bit 1 */
+    int16_t counts[6]; /* Fx Fy Fz Tx Ty Tz */
+    double force[3];   /* counts * fs / 16384 [N] */
+    double torque[3];  /* counts * fs / 16384 [N m] */
 } loadid_modbus_ft_sample_t;
 
 /* Counters since init (decoder) or create (client). Invariants (checked by
@@ -99,36 +99,36 @@ typedef struct {
  *       + full_scale_malformed + timeouts + bad_frames + exceptions + io_errors */
 typedef struct {
     /* decoder */
-    int64_t blocks;             /* register blocks decoded */
-    int64_t samples_ok;         /* new and usable (LOADID_MODBUS_FT_SAMPLE) */
-    int64_t samples_rejected;   /* new, saturated or faulty or both */
-    int64_t samples_saturated;  /* new, status bit 0 */
-    int64_t samples_faulty;     /* new, status bit 1 */
-    int64_t samples_stale;      /* counter unchanged: the same sample again */
-    int64_t samples_malformed;  /* reserved status bits set */
-    int64_t counter_gaps;       /* measurements skipped: sum of (step - 1) */
-    int64_t full_scale_reads;   /* full-scale blocks taken */
+    int64_t blocks;               /* register blocks decoded */
+    int64_t samples_ok;           /* new and usable (LOADID_MODBUS_FT_SAMPLE) */
+    int64_t samples_rejected;     /* new, saturated or faulty or both */
+    int64_t samples_saturated;    /* new, status bit 0 */
+    int64_t samples_faulty;       /* new, status bit 1 */
+    int64_t samples_stale;        /* counter unchanged: the same sample again */
+    int64_t samples_malformed;    /* reserved status bits set */
+    int64_t counter_gaps;         /* measurements skipped: sum of (step - 1) */
+    int64_t full_scale_reads;     /* full-scale blocks taken */
     int64_t full_scale_malformed; /* full-scale blocks with a zero value */
     /* client */
-    int64_t reads;              /* sample transactions attempted */
+    int64_t reads;               /* sample transactions attempted */
     int64_t full_scale_requests; /* holding-register transactions (at open) */
-    int64_t timeouts;           /* ETIMEDOUT */
-    int64_t bad_frames;         /* EMBBADCRC, EMBBADSLAVE, EMBBADDATA, ... */
-    int64_t crc_errors;         /* ... of which EMBBADCRC */
-    int64_t exceptions;         /* EMBXILFUN .. EMBXGTAR (any transaction) */
-    int64_t io_errors;          /* other errno: the device is closed */
-    int64_t opens;              /* successful opens (1 + reopens) */
-    int64_t open_failures;      /* failed open attempts */
-    int64_t device_lost;        /* an open device that vanished or failed */
+    int64_t timeouts;            /* ETIMEDOUT */
+    int64_t bad_frames;          /* EMBBADCRC, EMBBADSLAVE, EMBBADDATA, ... */
+    int64_t crc_errors;          /* ... of which EMBBADCRC */
+    int64_t exceptions;          /* EMBXILFUN .. EMBXGTAR (any transaction) */
+    int64_t io_errors;           /* other errno: the device is closed */
+    int64_t opens;               /* successful opens (1 + reopens) */
+    int64_t open_failures;       /* failed open attempts */
+    int64_t device_lost;         /* an open device that vanished or failed */
 } loadid_modbus_ft_stats_t;
 
 /* The decoder's state: caller-owned (no allocation); fields are private. */
 typedef struct {
-    double fs_force[3];         /* in force [N] */
-    double fs_moment[3];        /* in force [N m] */
-    double cfg_force[3];        /* configured [N] */
-    double cfg_moment[3];       /* configured [N m] */
-    bool begun;                 /* a counter was seen */
+    double fs_force[3];   /* in force [N] */
+    double fs_moment[3];  /* in force [N m] */
+    double cfg_force[3];  /* configured [N] */
+    double cfg_moment[3]; /* configured [N m] */
+    bool begun;           /* a counter was seen */
     uint16_t last_counter;
     loadid_modbus_ft_stats_t st;
 } loadid_modbus_ft_decoder_t;
@@ -181,14 +181,14 @@ int loadid_modbus_ft_encode_full_scale(const double fs_force[3], const double fs
 /* Configuration (immutable after create); the YAML keys are modbus.*. */
 typedef struct {
     char device[LOADID_MODBUS_FT_DEVICE_MAX]; /* modbus.device, default /dev/ttyUSB0 */
-    int baud;                   /* modbus.baud [bit/s], default 115200 */
-    char parity;                /* 'N', 'E', 'O' (modbus.parity none/even/odd) */
-    int data_bits;              /* modbus.data_bits 5..8, default 8 */
-    int stop_bits;              /* modbus.stop_bits 1..2, default 1 */
-    int slave_id;               /* modbus.slave_id 1..247, default 1 */
-    int timeout_ms;             /* modbus.timeout_ms, response timeout, default 20 */
-    double fs_force[3];         /* modbus.full_scale.force [N], default 200 */
-    double fs_moment[3];        /* modbus.full_scale.moment [N m], default 12 */
+    int baud;                                 /* modbus.baud [bit/s], default 115200 */
+    char parity;                              /* 'N', 'E', 'O' (modbus.parity none/even/odd) */
+    int data_bits;                            /* modbus.data_bits 5..8, default 8 */
+    int stop_bits;                            /* modbus.stop_bits 1..2, default 1 */
+    int slave_id;                             /* modbus.slave_id 1..247, default 1 */
+    int timeout_ms;                           /* modbus.timeout_ms, response timeout, default 20 */
+    double fs_force[3];                       /* modbus.full_scale.force [N], default 200 */
+    double fs_moment[3];                      /* modbus.full_scale.moment [N m], default 12 */
 } loadid_modbus_ft_config_t;
 
 typedef struct loadid_modbus_ft loadid_modbus_ft_t; /* opaque */
@@ -238,8 +238,7 @@ int loadid_modbus_ft_read(loadid_modbus_ft_t *ft, loadid_modbus_ft_sample_t *out
 int loadid_modbus_ft_stats(const loadid_modbus_ft_t *ft, loadid_modbus_ft_stats_t *out);
 
 /* The full scales in force [N], [N m]. Returns 0, -EINVAL for NULL. */
-int loadid_modbus_ft_full_scale(const loadid_modbus_ft_t *ft, double force[3],
-                                double moment[3]);
+int loadid_modbus_ft_full_scale(const loadid_modbus_ft_t *ft, double force[3], double moment[3]);
 
 /* The last failure as a line for logs ("/dev/ttyUSB0: open: No such file or
  * directory"); "" when none. */

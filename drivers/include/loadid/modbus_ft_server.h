@@ -23,19 +23,19 @@ extern "C" {
 #endif
 
 enum loadid_modbus_ft_server_mode {
-    LOADID_MODBUS_FT_SERVER_NORMAL = 0,  /* modbus_reply */
-    LOADID_MODBUS_FT_SERVER_SILENT = 1,  /* read the request, answer nothing */
-    LOADID_MODBUS_FT_SERVER_BAD_CRC = 2  /* input reads: the right answer with
+    LOADID_MODBUS_FT_SERVER_NORMAL = 0, /* modbus_reply */
+    LOADID_MODBUS_FT_SERVER_SILENT = 1, /* read the request, answer nothing */
+    LOADID_MODBUS_FT_SERVER_BAD_CRC = 2 /* input reads: the right answer with
                                             its CRC inverted, written raw */
 };
 
 typedef struct {
-    int64_t requests;       /* requests for this slave */
-    int64_t input_reads;    /* of which function 0x04 */
-    int64_t holding_reads;  /* of which function 0x03 */
-    int64_t replies;        /* answered through modbus_reply (incl. exceptions) */
-    int64_t silent;         /* not answered (SILENT) */
-    int64_t bad_crc;        /* answered with a wrong CRC (BAD_CRC) */
+    int64_t requests;      /* requests for this slave */
+    int64_t input_reads;   /* of which function 0x04 */
+    int64_t holding_reads; /* of which function 0x03 */
+    int64_t replies;       /* answered through modbus_reply (incl. exceptions) */
+    int64_t silent;        /* not answered (SILENT) */
+    int64_t bad_crc;       /* answered with a wrong CRC (BAD_CRC) */
 } loadid_modbus_ft_server_stats_t;
 
 typedef struct loadid_modbus_ft_server loadid_modbus_ft_server_t; /* opaque */

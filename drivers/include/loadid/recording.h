@@ -25,21 +25,21 @@ extern "C" {
 #endif
 
 typedef enum {
-    LOADID_REC_CAN = 1,       /* a frame of can.log */
-    LOADID_REC_LCM = 2,       /* an event of lcm.log */
-    LOADID_REC_BAD_LINE = 3   /* a can.log line that is not a frame */
+    LOADID_REC_CAN = 1,     /* a frame of can.log */
+    LOADID_REC_LCM = 2,     /* an event of lcm.log */
+    LOADID_REC_BAD_LINE = 3 /* a can.log line that is not a frame */
 } loadid_rec_kind_t;
 
 typedef struct {
     loadid_rec_kind_t kind;
-    int64_t t_us;             /* CAN: receive time; LCM: the event's time */
-    loadid_can_frame_t can;   /* LOADID_REC_CAN */
-    const char *channel;      /* LOADID_REC_LCM: valid until the next call */
-    const uint8_t *data;      /* LOADID_REC_LCM: the encoded message */
+    int64_t t_us;           /* CAN: receive time; LCM: the event's time */
+    loadid_can_frame_t can; /* LOADID_REC_CAN */
+    const char *channel;    /* LOADID_REC_LCM: valid until the next call */
+    const uint8_t *data;    /* LOADID_REC_LCM: the encoded message */
     int datalen;
-    int64_t offset;           /* LOADID_REC_LCM: the event's byte offset in lcm.log */
-    long line;                /* LOADID_REC_CAN, _BAD_LINE: line in can.log */
-    int error;                /* LOADID_REC_BAD_LINE: the candump error code */
+    int64_t offset; /* LOADID_REC_LCM: the event's byte offset in lcm.log */
+    long line;      /* LOADID_REC_CAN, _BAD_LINE: line in can.log */
+    int error;      /* LOADID_REC_BAD_LINE: the candump error code */
 } loadid_rec_event_t;
 
 typedef struct loadid_recording_reader loadid_recording_reader_t; /* opaque */

@@ -21,21 +21,21 @@
 extern "C" {
 #endif
 
-#define LOADID_MAX_JOINTS 16      /* movable joints of one chain */
-#define LOADID_NAME_MAX 64        /* link and joint names, with the NUL */
+#define LOADID_MAX_JOINTS 16 /* movable joints of one chain */
+#define LOADID_NAME_MAX 64   /* link and joint names, with the NUL */
 
 typedef enum {
-    LOADID_JOINT_REVOLUTE = 1,    /* URDF revolute and continuous [rad] */
-    LOADID_JOINT_PRISMATIC = 2    /* URDF prismatic [m] */
+    LOADID_JOINT_REVOLUTE = 1, /* URDF revolute and continuous [rad] */
+    LOADID_JOINT_PRISMATIC = 2 /* URDF prismatic [m] */
 } loadid_joint_type_t;
 
 typedef struct {
     char name[LOADID_NAME_MAX];
     loadid_joint_type_t type;
-    double origin_xyz[3];         /* parent frame -> joint frame [m] */
-    double origin_rot[9];         /* its rotation, row-major; columns are the
+    double origin_xyz[3]; /* parent frame -> joint frame [m] */
+    double origin_rot[9]; /* its rotation, row-major; columns are the
                                      joint frame's axes in the parent frame */
-    double axis[3];               /* unit vector in the joint frame */
+    double axis[3];       /* unit vector in the joint frame */
     /* Limits from the URDF <limit> (position in rad or m, velocity in rad/s
      * or m/s); a continuous joint has lower = -inf, upper = +inf. A limit
      * the URDF does not give is +inf (velocity) or +-inf (position). */
@@ -45,10 +45,10 @@ typedef struct {
 typedef struct {
     char base_link[LOADID_NAME_MAX];
     char sensor_link[LOADID_NAME_MAX];
-    int num_joints;               /* 1 .. LOADID_MAX_JOINTS */
+    int num_joints;                                /* 1 .. LOADID_MAX_JOINTS */
     loadid_joint_desc_t joints[LOADID_MAX_JOINTS]; /* base to sensor order */
-    double tip_xyz[3];            /* last joint's child frame -> S [m] */
-    double tip_rot[9];            /* row-major, like origin_rot */
+    double tip_xyz[3];                             /* last joint's child frame -> S [m] */
+    double tip_rot[9];                             /* row-major, like origin_rot */
 } loadid_chain_t;
 
 /* Checks a chain for use: 1 .. LOADID_MAX_JOINTS joints, known types, unit

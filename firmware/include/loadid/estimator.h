@@ -45,7 +45,7 @@ typedef enum {
  * fills every field; change what you need before create. */
 typedef struct {
     loadid_method_t method;
-    int n_params;                  /* 10 or 16 */
+    int n_params; /* 10 or 16 */
     /* Standard deviation of the noise of each wrench row [N, N, N, Nm, Nm,
      * Nm]. RLS/RIV use Lambda = diag(row_sigma^2) (eqs. 17, 20); RTLS and
      * the batch methods use the row weights D = diag(1 / row_sigma) (eq. 24).
@@ -103,16 +103,16 @@ typedef struct {
 
 /* What estimate() reports beside phi. */
 typedef struct {
-    int64_t samples;               /* samples used so far */
-    loadid_real_t condition_number;/* kappa of D A_Xi T (columns of A only);
+    int64_t samples;                   /* samples used so far */
+    loadid_real_t condition_number;    /* kappa of D A_Xi T (columns of A only);
                                       +Inf when rank-deficient */
-    loadid_real_t noise_ratio;     /* sigma_{n+1} / sigma_n of D [A y]_Xi T,
+    loadid_real_t noise_ratio;         /* sigma_{n+1} / sigma_n of D [A y]_Xi T,
                                       in [0, 1]; 1 with no data */
-    loadid_real_t sigma_min;       /* RTLS, TLS_BATCH: smallest singular value
+    loadid_real_t sigma_min;           /* RTLS, TLS_BATCH: smallest singular value
                                       of D [A y] T; 0 for the others */
-    int sigma_min_multiplicity;    /* RTLS, TLS_BATCH: p of the Householder
+    int sigma_min_multiplicity;        /* RTLS, TLS_BATCH: p of the Householder
                                       step (1 = unique); 0 for the others */
-    int reorthogonalisations;      /* RTLS: times U was re-orthogonalised */
+    int reorthogonalisations;          /* RTLS: times U was re-orthogonalised */
     loadid_real_t orthogonality_error; /* RTLS: ||U^T U - I||_F, measured at most
                                           64 updates ago (rtls.hpp) */
 } loadid_est_info_t;
@@ -122,8 +122,7 @@ typedef struct loadid_est loadid_est_t; /* opaque */
 /* Fills cfg with the defaults above for this method and parameter count.
  * Returns 0, or -EINVAL for a NULL cfg, an unknown method or n_params not
  * 10 or 16. */
-int loadid_est_config_default(loadid_method_t method, int n_params,
-                              loadid_est_config_t *cfg);
+int loadid_est_config_default(loadid_method_t method, int n_params, loadid_est_config_t *cfg);
 
 /* Sets row_sigma and col_weight from physical noise levels, so that after
  * weighting every entry of D [A y] T carries noise of about the same size
@@ -133,10 +132,10 @@ int loadid_est_config_default(loadid_method_t method, int n_params,
  * typical size of the angular velocity (its products enter eq. 6).
  * Returns 0, -EINVAL (NULL cfg) or -EDOM (a level not finite and > 0;
  * omega_typ may be 0). */
-int loadid_est_weights_from_noise(loadid_est_config_t *cfg,
-                                  loadid_real_t sigma_f, loadid_real_t sigma_tau,
-                                  loadid_real_t sigma_spec, loadid_real_t sigma_alpha,
-                                  loadid_real_t sigma_omega, loadid_real_t omega_typ);
+int loadid_est_weights_from_noise(loadid_est_config_t *cfg, loadid_real_t sigma_f,
+                                  loadid_real_t sigma_tau, loadid_real_t sigma_spec,
+                                  loadid_real_t sigma_alpha, loadid_real_t sigma_omega,
+                                  loadid_real_t omega_typ);
 
 /* Allocates and initialises an estimator (the only allocation it ever
  * makes). Returns 0 and sets *out, -EINVAL for a NULL pointer or an invalid
@@ -198,8 +197,8 @@ int loadid_est_residual_scales(const loadid_est_t *est, const loadid_real_t *phi
  * RIV, ignored by the others, may be NULL).
  * Returns 0; -EINVAL (NULL pointer); LOADID_E_NONFINITE (nothing changed);
  * LOADID_E_FULL (batch store full, nothing changed). */
-int loadid_est_update(loadid_est_t *est, const loadid_real_t *A,
-                      const loadid_real_t *C, const loadid_real_t y[6]);
+int loadid_est_update(loadid_est_t *est, const loadid_real_t *A, const loadid_real_t *C,
+                      const loadid_real_t y[6]);
 
 /* The current estimate: phi (n_params values; eq. 5 then, for 16, the
  * offset) and info (may be NULL).
@@ -209,8 +208,7 @@ int loadid_est_update(loadid_est_t *est, const loadid_real_t *A,
  * all zeros, info is filled);
  * LOADID_E_NO_SOLUTION (TLS only: eq. 36 has no solution; phi zeros).
  * phi never holds NaN or Inf. */
-int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi,
-                        loadid_est_info_t *info);
+int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi, loadid_est_info_t *info);
 
 /* One standard deviation of each element of phi, this estimator's own
  * estimate (as loadid_est_estimate gave it), from its covariance on the
@@ -223,8 +221,8 @@ int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi,
  * Returns 0; -EINVAL; LOADID_E_NONFINITE (phi not finite);
  * LOADID_E_NOT_EXCITED (too few samples, or the data leave a direction of
  * phi undetermined: std is then +Inf). No allocation, no system call. */
-int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real_t *phi,
-                           loadid_real_t *std, loadid_real_t *scale);
+int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real_t *phi, loadid_real_t *std,
+                           loadid_real_t *scale);
 
 /* How far each group of phi stands out of the noise in this estimator's
  * data: snr[0] (mass), snr[1] (m c), snr[2] (inertia) are the RMS over the
@@ -245,8 +243,7 @@ int loadid_est_signal_to_noise(const loadid_est_t *est, const loadid_real_t *phi
  * "not excited" refusal lacks. dir: n_params values; *ratio (may be NULL):
  * sqrt(lambda_min / lambda_max). Returns 0, -EINVAL or
  * LOADID_E_NOT_EXCITED (no samples). */
-int loadid_est_weakest_direction(const loadid_est_t *est, loadid_real_t *dir,
-                                 loadid_real_t *ratio);
+int loadid_est_weakest_direction(const loadid_est_t *est, loadid_real_t *dir, loadid_real_t *ratio);
 
 /* The configuration the estimator was created with. */
 const loadid_est_config_t *loadid_est_config(const loadid_est_t *est);

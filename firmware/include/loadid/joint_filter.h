@@ -75,8 +75,7 @@ typedef struct loadid_jf loadid_jf_t; /* opaque: num_joints filters */
 
 /* Returns 0, -EINVAL (NULL pointer, num_joints outside 1..16, a config
  * value not finite and > 0) or -ENOMEM. The only allocation. */
-int loadid_jf_create(int num_joints, const loadid_jf_config_t *cfg,
-                     loadid_jf_t **out);
+int loadid_jf_create(int num_joints, const loadid_jf_config_t *cfg, loadid_jf_t **out);
 
 void loadid_jf_destroy(loadid_jf_t *jf);
 
@@ -93,8 +92,8 @@ int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real_t *q);
 /* The filtered state propagated by the model to t_us, before or after the
  * last update (the filters themselves do not change). Any output may be
  * NULL. Returns 0, -EINVAL, or LOADID_E_NO_DATA before the first update. */
-int loadid_jf_state_at(const loadid_jf_t *jf, int64_t t_us, loadid_real_t *q,
-                       loadid_real_t *qd, loadid_real_t *qdd);
+int loadid_jf_state_at(const loadid_jf_t *jf, int64_t t_us, loadid_real_t *q, loadid_real_t *qd,
+                       loadid_real_t *qdd);
 
 /* Time of the last accepted update [us]; INT64_MIN before the first. */
 int64_t loadid_jf_last_time(const loadid_jf_t *jf);
@@ -159,9 +158,8 @@ size_t loadid_jf_smooth_work_size(size_t count);
  * whole input is checked before anything is written. Returns 0, -EINVAL (NULL
  * pointer, count 0, bad config), LOADID_E_NONFINITE or
  * LOADID_E_TIME_ORDER. */
-int loadid_jf_smooth(const loadid_jf_config_t *cfg, size_t count,
-                     const int64_t *t_us, const loadid_real_t *q,
-                     loadid_real_t *work, loadid_real_t *q_out,
+int loadid_jf_smooth(const loadid_jf_config_t *cfg, size_t count, const int64_t *t_us,
+                     const loadid_real_t *q, loadid_real_t *work, loadid_real_t *q_out,
                      loadid_real_t *qd_out, loadid_real_t *qdd_out);
 
 /* Standard deviations of the filter's (smoothed = 0) or the RTS

@@ -58,10 +58,10 @@ typedef struct {
 } loadid_model_config_t;
 
 typedef struct {
-    int identified;                 /* LOADID_IDENT_* bits */
-    int projected;                  /* phi differs from the estimate */
-    loadid_real_t phi[10];          /* physically consistent (eq. 5) */
-    loadid_physical_t physical;     /* mass, COM, inertia about the COM of phi */
+    int identified;             /* LOADID_IDENT_* bits */
+    int projected;              /* phi differs from the estimate */
+    loadid_real_t phi[10];      /* physically consistent (eq. 5) */
+    loadid_physical_t physical; /* mass, COM, inertia about the COM of phi */
 } loadid_load_model_t;
 
 void loadid_model_config_default(loadid_model_config_t *cfg);

@@ -31,15 +31,13 @@ int loadid_regressor(const loadid_real_t spec[3], const loadid_real_t omega[3],
  * pose where the wrench was zeroed [m/s^2] (e.g. [0 0 -9.81] with z up).
  * Use it when y is the measured wrench minus the wrench read at zeroing.
  * Returns 0, -EINVAL, or LOADID_E_NONFINITE (A untouched). */
-int loadid_regressor_add_zeroing(const loadid_real_t g_init[3],
-                                 loadid_real_t A[6 * 10]);
+int loadid_regressor_add_zeroing(const loadid_real_t g_init[3], loadid_real_t A[6 * 10]);
 
 /* Widens a 6x10 regressor into the 16-parameter model [A E6] (6x16,
  * row-major) whose last six parameters are the sensor offset [o_f; o_tau],
  * so no zeroing is needed. A and A16 must not overlap.
  * Returns 0 or -EINVAL. */
-int loadid_regressor_with_offset(const loadid_real_t A[6 * 10],
-                                 loadid_real_t A16[6 * 16]);
+int loadid_regressor_with_offset(const loadid_real_t A[6 * 10], loadid_real_t A16[6 * 16]);
 
 /* The data matrix of an estimation model in one call: n_params 10 gives
  * eq. (6), plus the zeroing term of eqs. (7)-(9) when g_init is not NULL;
@@ -52,8 +50,8 @@ int loadid_regressor_model(const loadid_real_t spec[3], const loadid_real_t omeg
 
 /* The wrench the model predicts: y = A phi for an A of n_params columns
  * (10 or 16). Returns 0 or -EINVAL. */
-int loadid_regressor_apply(const loadid_real_t *A, int n_params,
-                           const loadid_real_t *phi, loadid_real_t y[6]);
+int loadid_regressor_apply(const loadid_real_t *A, int n_params, const loadid_real_t *phi,
+                           loadid_real_t y[6]);
 
 #ifdef __cplusplus
 }

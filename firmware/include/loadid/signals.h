@@ -53,15 +53,15 @@ const char *loadid_signal_source_name(loadid_signal_source_t source);
 
 /* The regressor's inputs, in S. */
 typedef struct {
-    loadid_real_t spec[3];        /* a - g [m/s^2] */
-    loadid_real_t omega[3];       /* [rad/s] */
-    loadid_real_t alpha[3];       /* [rad/s^2] */
+    loadid_real_t spec[3];  /* a - g [m/s^2] */
+    loadid_real_t omega[3]; /* [rad/s] */
+    loadid_real_t alpha[3]; /* [rad/s^2] */
 } loadid_regressor_input_t;
 
 typedef struct {
-    loadid_signal_source_t source;    /* default MIXED (docs/INTERFACE.md) */
-    loadid_jf_config_t measured;      /* filter of the encoder positions */
-    loadid_jf_config_t setpoint;      /* filter of the commanded positions */
+    loadid_signal_source_t source; /* default MIXED (docs/INTERFACE.md) */
+    loadid_jf_config_t measured;   /* filter of the encoder positions */
+    loadid_jf_config_t setpoint;   /* filter of the commanded positions */
     /* A sensor sample further than this from the newest joint state [us]
      * (with the fixed-lag smoother: from the smoothed one it is served
      * from) is refused as stale. Default 5000 (five joint periods at 1 kHz). */
@@ -88,11 +88,11 @@ typedef struct {
 /* Counters since create or reset. */
 typedef struct {
     int64_t joint_msgs_ok;
-    int64_t joint_msgs_bad;       /* wrong joint count, NaN/Inf, time order */
-    int64_t samples_ok;           /* loadid_signals_at served them */
-    int64_t samples_stale;        /* refused: joint data too old or too new */
-    int64_t samples_no_joints;    /* refused: no joint state yet */
-    int64_t samples_bad;          /* refused: NaN/Inf sensor input */
+    int64_t joint_msgs_bad;    /* wrong joint count, NaN/Inf, time order */
+    int64_t samples_ok;        /* loadid_signals_at served them */
+    int64_t samples_stale;     /* refused: joint data too old or too new */
+    int64_t samples_no_joints; /* refused: no joint state yet */
+    int64_t samples_bad;       /* refused: NaN/Inf sensor input */
 } loadid_signals_stats_t;
 
 typedef struct loadid_signals loadid_signals_t; /* opaque */
@@ -102,8 +102,7 @@ int loadid_signals_config_default(loadid_signals_config_t *cfg);
 /* Builds the kinematics of chain (gravity in the base frame) and the two
  * filter banks. The only allocation. Returns 0, -EINVAL or -ENOMEM. */
 int loadid_signals_create(const loadid_chain_t *chain, const double gravity[3],
-                          const loadid_signals_config_t *cfg,
-                          loadid_signals_t **out);
+                          const loadid_signals_config_t *cfg, loadid_signals_t **out);
 
 void loadid_signals_destroy(loadid_signals_t *s);
 
@@ -116,9 +115,8 @@ int loadid_signals_num_joints(const loadid_signals_t *s);
  * setpoints, num_joints each. Returns 0, or (counted in joint_msgs_bad,
  * nothing changed) -EBADMSG for a joint count not the chain's,
  * LOADID_E_NONFINITE, LOADID_E_TIME_ORDER; -EINVAL for a NULL s. */
-int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us,
-                               int num_joints, const loadid_real_t *position,
-                               const loadid_real_t *setpoint);
+int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int num_joints,
+                               const loadid_real_t *position, const loadid_real_t *setpoint);
 
 /* The regressor's inputs for the sensor sample at t_us, from the
  * configured source, and RIV's instruments from the setpoints.
@@ -130,10 +128,8 @@ int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us,
  * LOADID_E_NO_DATA (no joint state yet, or no setpoint when one is
  * needed), LOADID_E_STALE, LOADID_E_NONFINITE; -EINVAL (NULL s, or a JR3
  * input the source needs is NULL). */
-int loadid_signals_at(loadid_signals_t *s, int64_t t_us,
-                      const loadid_real_t jr3_spec[3],
-                      const loadid_real_t jr3_alpha[3],
-                      const loadid_real_t *exact_setpoint,
+int loadid_signals_at(loadid_signals_t *s, int64_t t_us, const loadid_real_t jr3_spec[3],
+                      const loadid_real_t jr3_alpha[3], const loadid_real_t *exact_setpoint,
                       loadid_regressor_input_t *motion, loadid_regressor_input_t *instruments);
 
 /* Forward kinematics of the measured joints (filtered) at t_us: the pose,
@@ -142,8 +138,7 @@ int loadid_signals_at(loadid_signals_t *s, int64_t t_us,
 int loadid_signals_kinematics_at(const loadid_signals_t *s, int64_t t_us,
                                  loadid_kin_state_t *state);
 
-int loadid_signals_stats(const loadid_signals_t *s,
-                         loadid_signals_stats_t *stats);
+int loadid_signals_stats(const loadid_signals_t *s, loadid_signals_stats_t *stats);
 
 /* Time of the newest accepted joint state [us]; INT64_MIN before the
  * first (or for a NULL s). A sensor sample no later than this has joint

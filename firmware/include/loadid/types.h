@@ -18,9 +18,9 @@ typedef double loadid_real_t;
 #endif
 
 /* Sizes of the paper's model. */
-#define LOADID_NROWS 6           /* rows of one regressor: f (3), tau (3) */
-#define LOADID_NPHI 10           /* eq. (5): m, m*c (3), I_S (6) */
-#define LOADID_NPHI_OFFSET 16    /* [phi; o_f; o_tau]: regressor [A E6] */
+#define LOADID_NROWS 6        /* rows of one regressor: f (3), tau (3) */
+#define LOADID_NPHI 10        /* eq. (5): m, m*c (3), I_S (6) */
+#define LOADID_NPHI_OFFSET 16 /* [phi; o_f; o_tau]: regressor [A E6] */
 #define LOADID_MAX_PARAMS 16
 
 /*

@@ -55,28 +55,28 @@ enum { LOADID_SENSOR_JR3 = 0, LOADID_SENSOR_MODBUS = 1 };
 
 typedef struct {
     /* robot: (docs/INTERFACE.md) */
-    char robot_urdf[LOADID_PATH_MAX];   /* resolved path; default: the shipped
+    char robot_urdf[LOADID_PATH_MAX];             /* resolved path; default: the shipped
                                            host/config/robots/rx60.urdf */
     char robot_urdf_origin[LOADID_PATH_MAX + 32]; /* where robot_urdf was set, for
                                            messages about the file: "FILE:LINE:
                                            robot.urdf", or "robot.urdf (default)" */
-    char robot_base_link[LOADID_NAME_MAX];   /* default "base_link" */
-    char robot_sensor_link[LOADID_NAME_MAX]; /* default "ft_sensor" */
-    double robot_gravity[3];            /* default [0 0 -9.81] */
+    char robot_base_link[LOADID_NAME_MAX];        /* default "base_link" */
+    char robot_sensor_link[LOADID_NAME_MAX];      /* default "ft_sensor" */
+    double robot_gravity[3];                      /* default [0 0 -9.81] */
 
     /* can: */
-    char can_interface[32];             /* default "vcan0" */
-    uint32_t can_base_id;               /* default 0x1A0; 11-bit, base+4 <= 0x7FF */
+    char can_interface[32]; /* default "vcan0" */
+    uint32_t can_base_id;   /* default 0x1A0; 11-bit, base+4 <= 0x7FF */
 
     /* jr3.full_scale: value = counts * full_scale / 16384 */
-    double jr3_fs_force[3];             /* default 200 N */
-    double jr3_fs_moment[3];            /* default 12 N m */
-    double jr3_fs_linear[3];            /* default 98.1 m/s^2 */
-    double jr3_fs_angular[3];           /* default 1000 rad/s^2 */
+    double jr3_fs_force[3];   /* default 200 N */
+    double jr3_fs_moment[3];  /* default 12 N m */
+    double jr3_fs_linear[3];  /* default 98.1 m/s^2 */
+    double jr3_fs_angular[3]; /* default 1000 rad/s^2 */
 
     /* lcm: */
-    char lcm_url[256];                  /* default udpm://239.255.76.67:7667?ttl=0 */
-    char lcm_channel_prefix[64];        /* default "": put before every channel name
+    char lcm_url[256];           /* default udpm://239.255.76.67:7667?ttl=0 */
+    char lcm_channel_prefix[64]; /* default "": put before every channel name
                                            (several robots on one LCM network: "R2_"
                                            gives R2_LOADID_ESTIMATE ...); letters,
                                            digits, '_', '-', '.', '/' only */
@@ -84,40 +84,40 @@ typedef struct {
      * (udpm:// only), IPv4 addresses or CIDR blocks; default none listed:
      * every sender (docs/SECURITY.md says why). */
     loadid_ipv4_net_t lcm_command_sources[LOADID_IPV4_ALLOW_MAX];
-    int lcm_num_command_sources;        /* 0: accept commands from any sender */
+    int lcm_num_command_sources; /* 0: accept commands from any sender */
 
     /* estimation: */
-    int num_methods;                    /* default 3: RTLS, RIV, RLS */
-    int methods[LOADID_MAX_METHODS];    /* loadid_method_t values, in file order */
-    int signals;                        /* loadid_signal_source_t; default KF (with
+    int num_methods;                 /* default 3: RTLS, RIV, RLS */
+    int methods[LOADID_MAX_METHODS]; /* loadid_method_t values, in file order */
+    int signals;                     /* loadid_signal_source_t; default KF (with
                                            kalman.lag_s, measured best by the study) */
-    int offset_model_estimate;          /* 0: "zeroing" (default), 1: "estimate" */
-    double duration_s;                  /* default 1.5 */
-    int publish_every;                  /* estimation.publish_every: (loadid) live,
+    int offset_model_estimate;       /* 0: "zeroing" (default), 1: "estimate" */
+    double duration_s;               /* default 1.5 */
+    int publish_every;               /* estimation.publish_every: (loadid) live,
                                            estimate_t after every n-th sample while
                                            estimating (1, default: every sample);
                                            the final one always; 1..1000000 */
-    double rescale_s;                   /* estimation.rescale_s: (loadid) when, after START,
+    double rescale_s;                /* estimation.rescale_s: (loadid) when, after START,
                                            the TLS methods weigh their rows again by
                                            the residual the noise does not explain;
                                            0: never */
-    double max_missing_share;           /* estimation.max_missing_share: (loadid) a
+    double max_missing_share;        /* estimation.max_missing_share: (loadid) a
                                            run whose window lost more than this
                                            share of its samples for want of joint
                                            data, or of its time for want of F/T
                                            samples, is incomplete; [0, 1],
                                            default 0.02 */
-    double max_refused_share;           /* estimation.max_refused_share: (loadid) a
+    double max_refused_share;        /* estimation.max_refused_share: (loadid) a
                                            run whose window's F/T samples were
                                            refused (saturated, faulty, incomplete)
                                            more often than this share is
                                            incomplete; [0, 1], default 0.1 */
 
     /* zeroing: */
-    double zeroing_window_s;            /* default 0.2 */
+    double zeroing_window_s; /* default 0.2 */
 
     /* distal: */
-    double distal_phi[10];              /* default 0 */
+    double distal_phi[10]; /* default 0 */
 
     /* sensor: (loadid) the wrench source. type: LOADID_SENSOR_JR3 ("jr3",
      * default: the JR3 on CAN, can.* and jr3.*) or LOADID_SENSOR_MODBUS
@@ -127,19 +127,19 @@ typedef struct {
     int sensor_type;
 
     /* modbus: (loadid) the serial F/T sensor, proto/modbus_ft.md */
-    char modbus_device[256];            /* serial device, default /dev/ttyUSB0 */
-    int modbus_baud;                    /* bit/s, default 115200 (a rate
+    char modbus_device[256];    /* serial device, default /dev/ttyUSB0 */
+    int modbus_baud;            /* bit/s, default 115200 (a rate
                                            libmodbus maps on Linux) */
-    char modbus_parity;                 /* 'N' (default, "none"), 'E' ("even"),
+    char modbus_parity;         /* 'N' (default, "none"), 'E' ("even"),
                                            'O' ("odd") */
-    int modbus_data_bits;               /* 5..8, default 8 */
-    int modbus_stop_bits;               /* 1..2, default 1 */
-    int modbus_slave_id;                /* 1..247, default 1 */
-    double modbus_rate_hz;              /* poll rate, (0, 1000], default 200 */
-    int modbus_timeout_ms;              /* response timeout, 1..60000, default 20 */
-    double modbus_fs_force[3];          /* full scales [N], default 200; the
+    int modbus_data_bits;       /* 5..8, default 8 */
+    int modbus_stop_bits;       /* 1..2, default 1 */
+    int modbus_slave_id;        /* 1..247, default 1 */
+    double modbus_rate_hz;      /* poll rate, (0, 1000], default 200 */
+    int modbus_timeout_ms;      /* response timeout, 1..60000, default 20 */
+    double modbus_fs_force[3];  /* full scales [N], default 200; the
                                            sensor's holding registers override */
-    double modbus_fs_moment[3];         /* [N m], default 12; likewise */
+    double modbus_fs_moment[3]; /* [N m], default 12; likewise */
 
     /* realtime: (loadid) the live service's scheduling. priority: SCHED_FIFO
      * priority 1..99 of the loop (the Modbus poller thread: one below, at
@@ -168,31 +168,31 @@ typedef struct {
      * filter's own covariance. A number given overrides that level alone
      * (its bit in noise_given). The values below are the fallbacks used
      * when nothing could be measured. */
-    int noise_given;                    /* LOADID_NOISE_GIVEN_* bits */
-    double noise_force;                 /* [N], fallback 0.1 */
-    double noise_torque;                /* [N m], fallback 0.005 */
-    double noise_linear;                /* a - g [m/s^2], fallback 0.5 */
-    double noise_angular;               /* alpha [rad/s^2], fallback 5 */
-    double noise_omega;                 /* [rad/s], fallback 0.02 */
-    double omega_typical;               /* [rad/s], default 2 (a column scale,
+    int noise_given;      /* LOADID_NOISE_GIVEN_* bits */
+    double noise_force;   /* [N], fallback 0.1 */
+    double noise_torque;  /* [N m], fallback 0.005 */
+    double noise_linear;  /* a - g [m/s^2], fallback 0.5 */
+    double noise_angular; /* alpha [rad/s^2], fallback 5 */
+    double noise_omega;   /* [rad/s], fallback 0.02 */
+    double omega_typical; /* [rad/s], default 2 (a column scale,
                                            not a noise: always as configured) */
 
     /* kalman: (loadid) the joint filters (loadid/joint_filter.h) */
-    double kalman_jerk_psd;             /* default 10 (behind the fixed-lag smoother;
+    double kalman_jerk_psd;        /* default 10 (behind the fixed-lag smoother;
                                            1e3 for the causal filter, lag_s 0) */
-    double kalman_meas_sigma;           /* default: loadid_jf_config_default */
-    double kalman_max_joint_age_s;      /* default 0.005 */
-    double kalman_lag_s;                /* kalman.lag_s: the on-line fixed-lag
+    double kalman_meas_sigma;      /* default: loadid_jf_config_default */
+    double kalman_max_joint_age_s; /* default 0.005 */
+    double kalman_lag_s;           /* kalman.lag_s: the on-line fixed-lag
                                            smoother's lag [s]: the estimators run
                                            this far behind the newest joint state,
                                            on zero-lag joint signals; 0 = the
                                            causal filter; default 0.05, at most
                                            kalman.joint_period_s * 200 */
-    double kalman_stamp_gain;           /* kalman.stamp_gain: the joint stamps'
+    double kalman_stamp_gain;      /* kalman.stamp_gain: the joint stamps'
                                            phase-locked loop (loadid/signals.h),
                                            (0, 1], 1 = stamps as they are;
                                            default 0.005 */
-    double kalman_joint_period_s;       /* kalman.joint_period_s: the joint
+    double kalman_joint_period_s;  /* kalman.joint_period_s: the joint
                                            stream's period [s], for the smoother's
                                            steady gains; default 0.001 */
     /* Noise of what the filters and the kinematics derive, for the
@@ -206,76 +206,76 @@ typedef struct {
     /* model: (loadid) identified groups and the load model
      * (firmware/include/loadid/load_model.h): thresholds and the fallback
      * density of an unidentified inertia */
-    double model_mass_rel_std;          /* [-], default 0.05 */
-    double model_com_std;               /* [m], default 0.005 */
-    double model_inertia_rel_std;       /* [-], default 0.3 */
-    double model_max_gyration;          /* [m], default 0.5 */
-    double model_fallback_density;      /* [kg/m^3], default 2700 */
-    double model_min_snr;               /* [-], default 1: the inertia's torque
+    double model_mass_rel_std;     /* [-], default 0.05 */
+    double model_com_std;          /* [m], default 0.005 */
+    double model_inertia_rel_std;  /* [-], default 0.3 */
+    double model_max_gyration;     /* [m], default 0.5 */
+    double model_fallback_density; /* [kg/m^3], default 2700 */
+    double model_min_snr;          /* [-], default 1: the inertia's torque
                                            over the torque noise, at least */
 
     /* trajectory: (loadid) the excitation designer, loadid-traj */
-    double traj_base_frequency;         /* f of eq. (10) [Hz], default 0.5 */
-    int traj_harmonics;                 /* N of eq. (10), default 4 */
-    double traj_max_frequency;          /* highest allowed harmonic [Hz], default 2 */
-    double traj_active_s;               /* active part, default 1.5 */
-    double traj_fade_s;                 /* each fade (eqs. 14-15), default 0.5 */
-    int traj_has_home;                  /* 1 when trajectory.home is given */
-    int traj_num_home;                  /* values in traj_home (1..16), 0 if not given */
-    double traj_home[LOADID_MAX_JOINTS];/* q_0 of eq. (11) [rad or m], one per
+    double traj_base_frequency;               /* f of eq. (10) [Hz], default 0.5 */
+    int traj_harmonics;                       /* N of eq. (10), default 4 */
+    double traj_max_frequency;                /* highest allowed harmonic [Hz], default 2 */
+    double traj_active_s;                     /* active part, default 1.5 */
+    double traj_fade_s;                       /* each fade (eqs. 14-15), default 0.5 */
+    int traj_has_home;                        /* 1 when trajectory.home is given */
+    int traj_num_home;                        /* values in traj_home (1..16), 0 if not given */
+    double traj_home[LOADID_MAX_JOINTS];      /* q_0 of eq. (11) [rad or m], one per
                                            joint; default mid-range */
-    int traj_num_acc_limits;            /* 0 (traj_acc_limit holds one value for
+    int traj_num_acc_limits;                  /* 0 (traj_acc_limit holds one value for
                                            every joint: the default, or a single
                                            number "acc_limit: 15"), or the count of
                                            the list "acc_limit: [...]" */
     double traj_acc_limit[LOADID_MAX_JOINTS]; /* [rad/s^2 or m/s^2] > 0; default 20 */
-    double traj_vel_scale;              /* fraction of the URDF velocity
+    double traj_vel_scale;                    /* fraction of the URDF velocity
                                            limits used, (0, 1], default 1 */
-    double traj_workspace_min[3];       /* box the sensor origin stays in,
+    double traj_workspace_min[3];             /* box the sensor origin stays in,
                                            base frame [m]; default -1e9 */
-    double traj_workspace_max[3];       /* default +1e9 */
-    double traj_floor_z;                /* floor plane z >= floor_z + clearance,
+    double traj_workspace_max[3];             /* default +1e9 */
+    double traj_floor_z;                      /* floor plane z >= floor_z + clearance,
                                            base frame [m]; default -1e9 */
-    double traj_floor_clearance;        /* [m], default 0.05 */
-    int traj_monte_carlo;               /* random candidates, default 2000 */
-    int traj_candidates;                /* best ones optimised, default 4;
+    double traj_floor_clearance;              /* [m], default 0.05 */
+    int traj_monte_carlo;                     /* random candidates, default 2000 */
+    int traj_candidates;                      /* best ones optimised, default 4;
                                            1..monte_carlo */
-    int traj_max_evals;                 /* NLopt evaluations each, default 3000 */
-    uint64_t traj_seed;                 /* default 1 */
+    int traj_max_evals;                       /* NLopt evaluations each, default 3000 */
+    uint64_t traj_seed;                       /* default 1 */
 
     /* simulation: (loadid) loadid-sim */
-    double sim_servo_bandwidth_hz;      /* joint servo natural frequency, default 15 */
-    double sim_servo_damping;           /* default 0.9 */
-    double sim_backlash;                /* [rad], default 2e-4 */
-    double sim_encoder_counts;          /* per revolution, default 2^20 */
-    double sim_vibration_hz;            /* structural vibration, default 28 */
-    double sim_vibration_linear;        /* amplitude on a - g [m/s^2], default 0.3 */
-    double sim_vibration_angular;       /* amplitude on alpha [rad/s^2], default 3 */
-    double sim_still_s;                 /* rest before the trajectory, default 0.5 */
-    double sim_load_phi[10];            /* default: the paper's o1 */
-    double sim_offset[6];               /* F/T offset [N, N m], default
+    double sim_servo_bandwidth_hz; /* joint servo natural frequency, default 15 */
+    double sim_servo_damping;      /* default 0.9 */
+    double sim_backlash;           /* [rad], default 2e-4 */
+    double sim_encoder_counts;     /* per revolution, default 2^20 */
+    double sim_vibration_hz;       /* structural vibration, default 28 */
+    double sim_vibration_linear;   /* amplitude on a - g [m/s^2], default 0.3 */
+    double sim_vibration_angular;  /* amplitude on alpha [rad/s^2], default 3 */
+    double sim_still_s;            /* rest before the trajectory, default 0.5 */
+    double sim_load_phi[10];       /* default: the paper's o1 */
+    double sim_offset[6];          /* F/T offset [N, N m], default
                                            [2 -1.5 3 0.08 -0.05 0.03] */
     /* Imitating real hardware data (defaults: none of it): */
-    int sim_zero;                       /* zero: a ZERO command 0.05 s into the
+    int sim_zero;                /* zero: a ZERO command 0.05 s into the
                                            still phase; false: none (START still
                                            comes), default true */
-    double sim_drift[6];                /* drift: the F/T offset grows by this
+    double sim_drift[6];         /* drift: the F/T offset grows by this
                                            times the time since the recording's
                                            start [N/s, N m/s], default 0 */
-    double sim_accel_bias[3];           /* accel_bias: added to the JR3 linear
+    double sim_accel_bias[3];    /* accel_bias: added to the JR3 linear
                                            channel a - g [m/s^2], default 0 */
-    double sim_alpha_bias[3];           /* alpha_bias: added to the JR3 angular
+    double sim_alpha_bias[3];    /* alpha_bias: added to the JR3 angular
                                            channel alpha [rad/s^2], default 0 */
-    int sim_jitter_us;                  /* jitter_us: each CAN sample's and joint
+    int sim_jitter_us;           /* jitter_us: each CAN sample's and joint
                                            state's time stamp moves by uniform
                                            integer jitter in [-N, N] us (the
                                            physics stays at the nominal time;
                                            streams kept strictly increasing),
                                            0..999, default 0 */
-    double sim_trajectory_scale;        /* trajectory_scale: the trajectory's
+    double sim_trajectory_scale; /* trajectory_scale: the trajectory's
                                            s_i(t) about q_0 (eqs. 10-11) times
                                            this, (0, 1], default 1 */
-    uint64_t sim_seed;                  /* default 1 */
+    uint64_t sim_seed;           /* default 1 */
     /* simulation.noise: the simulated sensor's noise [N, N m, m/s^2,
      * rad/s^2]; default the noise.* numbers given, else 0.1, 0.005, 0.5, 5 */
     double sim_noise_force, sim_noise_torque, sim_noise_linear, sim_noise_angular;
@@ -288,8 +288,8 @@ enum {
     LOADID_NOISE_GIVEN_LINEAR = 1 << 2,
     LOADID_NOISE_GIVEN_ANGULAR = 1 << 3,
     LOADID_NOISE_GIVEN_OMEGA = 1 << 4,
-    LOADID_NOISE_GIVEN_KF_SPEC = 1 << 5,  /* kalman.spec_sigma */
-    LOADID_NOISE_GIVEN_KF_ALPHA = 1 << 6  /* kalman.alpha_sigma */
+    LOADID_NOISE_GIVEN_KF_SPEC = 1 << 5, /* kalman.spec_sigma */
+    LOADID_NOISE_GIVEN_KF_ALPHA = 1 << 6 /* kalman.alpha_sigma */
 };
 
 /* Fills cfg with every default (robot_urdf: the shipped RX60, given the
@@ -317,9 +317,8 @@ int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t
  * as if it were the file at path (named in messages; relative paths in it
  * are resolved against its folder; nothing is read from disk). For the
  * fuzzer and tests. Returns 0, -EINVAL or -ENOMEM as loadid_config_load. */
-int loadid_config_load_string(const char *path, const char *text, size_t len,
-                              loadid_config_t *cfg, char *err, size_t errlen,
-                              loadid_config_warn_fn warn, void *warn_ctx);
+int loadid_config_load_string(const char *path, const char *text, size_t len, loadid_config_t *cfg,
+                              char *err, size_t errlen, loadid_config_warn_fn warn, void *warn_ctx);
 
 #ifdef __cplusplus
 }

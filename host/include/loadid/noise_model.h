@@ -40,11 +40,11 @@ enum { LOADID_NOISE_CHANNELS = 12 }; /* f xyz, tau xyz, a - g xyz, alpha xyz */
 
 /* Where a channel's level came from. */
 enum {
-    LOADID_NOISE_FALLBACK = 0,   /* nothing measured: the configuration's fallback */
-    LOADID_NOISE_STILL = 1,      /* the zeroing window */
-    LOADID_NOISE_DIFFERENCES = 2,/* third differences while moving */
-    LOADID_NOISE_CONFIGURED = 3, /* given in the configuration */
-    LOADID_NOISE_FILTER = 4      /* the joint filter's covariance */
+    LOADID_NOISE_FALLBACK = 0,    /* nothing measured: the configuration's fallback */
+    LOADID_NOISE_STILL = 1,       /* the zeroing window */
+    LOADID_NOISE_DIFFERENCES = 2, /* third differences while moving */
+    LOADID_NOISE_CONFIGURED = 3,  /* given in the configuration */
+    LOADID_NOISE_FILTER = 4       /* the joint filter's covariance */
 };
 
 #define LOADID_NOISE_STILL_MAX 4096 /* zeroing-window samples kept (the first) */
@@ -65,13 +65,13 @@ typedef struct {
 
 /* The levels the estimators use (standard deviations). */
 typedef struct {
-    double force, torque;   /* [N], [N m] */
-    double spec, alpha;     /* a - g [m/s^2], alpha [rad/s^2], of the source used */
-    double omega;           /* [rad/s] */
-    int source[5];          /* LOADID_NOISE_* of force, torque, spec, alpha, omega */
+    double force, torque; /* [N], [N m] */
+    double spec, alpha;   /* a - g [m/s^2], alpha [rad/s^2], of the source used */
+    double omega;         /* [rad/s] */
+    int source[5];        /* LOADID_NOISE_* of force, torque, spec, alpha, omega */
     /* what was measured, for the report */
-    double channel[LOADID_NOISE_CHANNELS]; /* per channel, 0 when not measured */
-    int channel_source;     /* LOADID_NOISE_STILL, _DIFFERENCES or _FALLBACK */
+    double channel[LOADID_NOISE_CHANNELS];       /* per channel, 0 when not measured */
+    int channel_source;                          /* LOADID_NOISE_STILL, _DIFFERENCES or _FALLBACK */
     double joint_spec, joint_alpha, joint_omega; /* from the joint filter; 0 if none */
 } loadid_noise_levels_t;
 

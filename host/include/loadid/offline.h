@@ -20,20 +20,20 @@ extern "C" {
 
 /* What a run read, for the messages of loadidd. */
 typedef struct {
-    int64_t t_first_us;           /* the first event's time [us], INT64_MIN
+    int64_t t_first_us;          /* the first event's time [us], INT64_MIN
                                      before one; set before that event is
                                      fed, so a sink may count from it */
-    int64_t t_last_us;            /* the last event's time [us] */
-    int64_t joint_states;         /* events on LOADID_JOINTS (with the prefix) */
-    int64_t joint_states_bad;     /* of which not decodable (the pipeline
+    int64_t t_last_us;           /* the last event's time [us] */
+    int64_t joint_states;        /* events on LOADID_JOINTS (with the prefix) */
+    int64_t joint_states_bad;    /* of which not decodable (the pipeline
                                      counts them in joint_msgs_bad) */
-    int64_t commands;             /* events on LOADID_COMMAND */
-    int64_t commands_bad;         /* of which not decodable (ignored) */
-    int64_t zeros, starts;        /* decoded ZERO and START commands */
-    int64_t other_events;         /* events on other channels (ignored) */
-    char first_bad[192];          /* the first undecodable message: channel,
+    int64_t commands;            /* events on LOADID_COMMAND */
+    int64_t commands_bad;        /* of which not decodable (ignored) */
+    int64_t zeros, starts;       /* decoded ZERO and START commands */
+    int64_t other_events;        /* events on other channels (ignored) */
+    char first_bad[192];         /* the first undecodable message: channel,
                                      byte offset, why; "" when none */
-    loadid_eventlog_stats_t lcm;  /* reading lcm.log: damage, truncation */
+    loadid_eventlog_stats_t lcm; /* reading lcm.log: damage, truncation */
 } loadid_offline_report_t;
 
 /* Returns 0, or a negative code with a one-line reason in err (the

@@ -57,48 +57,48 @@ enum { LOADID_CMD_ZERO = 1, LOADID_CMD_START = 2, LOADID_CMD_STOP = 3, LOADID_CM
 
 /* One method's estimate, the fields of estimate_t. */
 typedef struct {
-    int64_t utime;                /* newest sample used */
+    int64_t utime; /* newest sample used */
     int64_t samples;
-    int method;                   /* loadid_method_t */
+    int method; /* loadid_method_t */
     int state;
     char load_name[LOADID_LOAD_NAME_MAX];
-    double phi[10];               /* the load: distal part removed */
-    double offset[6];             /* estimated F/T offset ([A E6]), else 0 */
+    double phi[10];   /* the load: distal part removed */
+    double offset[6]; /* estimated F/T offset ([A E6]), else 0 */
     double mass, com[3], inertia_com[6];
     double condition_number;
     double sigma_min;
     int physically_consistent;
-    int valid;                    /* 0: no estimate yet (error says why) */
-    int error;                    /* the core's code when !valid */
-    char why[160];                /* when !valid: what is missing, in words */
+    int valid;     /* 0: no estimate yet (error says why) */
+    int error;     /* the core's code when !valid */
+    char why[160]; /* when !valid: what is missing, in words */
     /* Filled in the final estimate (DONE) only, load_model_t's fields
      * (phi_std also in every valid estimate after
      * loadid_pipeline_std_always): */
-    int has_model;                /* 1 when the fields below are set */
-    double phi_std[10];           /* one standard deviation of each element
+    int has_model;        /* 1 when the fields below are set */
+    double phi_std[10];   /* one standard deviation of each element
                                      (+Inf: not determined by the data) */
-    double noise_scale;           /* a-posteriori noise scale s (1: the
+    double noise_scale;   /* a-posteriori noise scale s (1: the
                                      weights' noise levels fit the data) */
-    int identified;               /* LOADID_IDENT_* bits (load_model.h) */
-    int projected;                /* model_phi differs from phi */
-    double model_phi[10];         /* physically consistent (load_model.h) */
-    double snr[3];                /* mass, m c, inertia: how far each stands out
+    int identified;       /* LOADID_IDENT_* bits (load_model.h) */
+    int projected;        /* model_phi differs from phi */
+    double model_phi[10]; /* physically consistent (load_model.h) */
+    double snr[3];        /* mass, m c, inertia: how far each stands out
                                      of the noise (loadid_est_signal_to_noise) */
     double model_mass, model_com[3], model_inertia_com[6];
     /* After loadid_pipeline_trace_rows, in every estimate published while
      * ESTIMATING and in the final ones: the window's newest sample so far
      * (the trace's columns, trace_csv.h). */
-    int has_row;                  /* 1 when the fields below are set */
-    double row_wrench[6];         /* its wrench as the estimators take it, less
+    int has_row;          /* 1 when the fields below are set */
+    double row_wrench[6]; /* its wrench as the estimators take it, less
                                      the distal part's: measured minus the
                                      zeroing average (eq. 7) when zeroing,
                                      minus A phi_distal [N, N m] */
-    double row_motion[9];         /* the signal source's a - g [m/s^2], omega
+    double row_motion[9]; /* the signal source's a - g [m/s^2], omega
                                      [rad/s], alpha [rad/s^2] of its regressor */
-    double row_g_init[3];         /* gravity in S at zeroing (the zeroing term of
+    double row_g_init[3]; /* gravity in S at zeroing (the zeroing term of
                                      eqs. 7-9: A is eq. (6) at a - g + g_init);
                                      0 with the offset model */
-    double residual[6];           /* row_wrench - A phi - offset: what this
+    double residual[6];   /* row_wrench - A phi - offset: what this
                                      estimate leaves unexplained [N, N m];
                                      NaN when !valid */
 } loadid_pipeline_estimate_t;
@@ -108,46 +108,46 @@ typedef struct {
  * registers by its poller): the one type the pipeline's queue, zeroing,
  * estimators and wrench_t take. In S, SI. */
 typedef struct {
-    int64_t t_us;                 /* its time [us], the joint states' clock */
-    double force[3];              /* f [N] */
-    double torque[3];             /* tau [N m] */
-    double spec[3];               /* the accelerometer's a - g [m/s^2] */
-    double alpha[3];              /* its angular acceleration [rad/s^2] */
-    uint8_t has_accel;            /* spec and alpha measured (the JR3); else
+    int64_t t_us;      /* its time [us], the joint states' clock */
+    double force[3];   /* f [N] */
+    double torque[3];  /* tau [N m] */
+    double spec[3];    /* the accelerometer's a - g [m/s^2] */
+    double alpha[3];   /* its angular acceleration [rad/s^2] */
+    uint8_t has_accel; /* spec and alpha measured (the JR3); else
                                      they are 0 and the signal source (kf,
                                      setpoint) takes them from the joints */
-    uint8_t saturated;            /* refused: counted, never fed */
-    uint8_t faulty;               /* refused: counted, never fed */
+    uint8_t saturated; /* refused: counted, never fed */
+    uint8_t faulty;    /* refused: counted, never fed */
 } loadid_sensor_sample_t;
 
 /* Counters (status_t's and more). */
 typedef struct {
     int state;
-    char reason[192];             /* why FAILED, else "" */
-    int64_t samples_ok;           /* complete usable JR3 samples, and usable
+    char reason[192];     /* why FAILED, else "" */
+    int64_t samples_ok;   /* complete usable JR3 samples, and usable
                                      loadid_pipeline_sample ones */
-    int64_t samples_used;         /* fed to the estimators this run */
-    int64_t frames_bad;           /* unknown id, wrong DLC, malformed, bad log line */
+    int64_t samples_used; /* fed to the estimators this run */
+    int64_t frames_bad;   /* unknown id, wrong DLC, malformed, bad log line */
     int64_t samples_incomplete;
     int64_t samples_saturated;
     int64_t samples_faulty;
-    int64_t samples_rejected;     /* saturated or faulty or both, each once
+    int64_t samples_rejected; /* saturated or faulty or both, each once
                                      (status_t.samples_saturated) */
     int64_t sequence_gaps;
     int64_t joint_msgs_bad;
-    int64_t samples_stale;        /* no joint state close enough */
-    int64_t estimator_errors;     /* updates refused (non-finite input, full) */
+    int64_t samples_stale;    /* no joint state close enough */
+    int64_t estimator_errors; /* updates refused (non-finite input, full) */
     /* The last estimation run, once it ended: */
-    int complete;                 /* 1: ZERO (when zeroing) and START seen, the
+    int complete;                /* 1: ZERO (when zeroing) and START seen, the
                                      window ran to its end (or STOP), F/T
                                      samples and joint data for nearly all
                                      of it (estimation.max_missing_share),
                                      few F/T samples refused
                                      (estimation.max_refused_share); 0 also
                                      after FAILED */
-    char incomplete_reason[256];  /* why not, else "" */
-    loadid_noise_levels_t noise;  /* the on-line estimators' noise levels */
-    double rescale[3];            /* what RTLS and TLS_BATCH multiplied the force
+    char incomplete_reason[256]; /* why not, else "" */
+    loadid_noise_levels_t noise; /* the on-line estimators' noise levels */
+    double rescale[3];           /* what RTLS and TLS_BATCH multiplied the force
                                      rows', torque rows' noise and the columns'
                                      weights by (estimation.rescale_s); 1 = kept */
 } loadid_pipeline_status_t;
@@ -220,14 +220,13 @@ void loadid_pipeline_status(const loadid_pipeline_t *p, loadid_pipeline_status_t
 
 /* The latest estimate of every configured method (in configuration order);
  * returns how many (<= max). */
-int loadid_pipeline_estimates(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *out,
-                              int max);
+int loadid_pipeline_estimates(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *out, int max);
 
 /* What compensating the wrench takes, besides the estimate: phi of load
  * and distal part together (and the offset, for 16 parameters), and the
  * zeroing (y0: the wrench averaged at zeroing, g_init: gravity in S then). */
 typedef struct {
-    int n_params;                 /* 10 (zeroing) or 16 ([A E6]) */
+    int n_params; /* 10 (zeroing) or 16 ([A E6]) */
     double phi_total[16];
     int zeroed;
     double y0[6], g_init[3];

@@ -46,13 +46,13 @@ extern "C" {
 typedef struct loadid_refined loadid_refined_t; /* opaque */
 
 typedef struct {
-    int64_t samples;           /* fed to the estimator */
-    double sensor_spec_error;  /* the accelerometer's RMS difference to the */
-    double sensor_alpha_error; /*   smoothed joints [m/s^2, rad/s^2]; 0 without one */
-    double unexplained[2];     /* force [N] and torque [N m] residual beyond the
+    int64_t samples;              /* fed to the estimator */
+    double sensor_spec_error;     /* the accelerometer's RMS difference to the */
+    double sensor_alpha_error;    /*   smoothed joints [m/s^2, rad/s^2]; 0 without one */
+    double unexplained[2];        /* force [N] and torque [N m] residual beyond the
                                   wrench's noise, added to the rows' levels */
-    double omega_rms;          /* [rad/s], the column scale used */
-    double jerk_psd;           /* the smoother's, chosen from the data */
+    double omega_rms;             /* [rad/s], the column scale used */
+    double jerk_psd;              /* the smoother's, chosen from the data */
     loadid_noise_levels_t levels; /* the levels the final weights used */
 } loadid_refined_report_t;
 

@@ -52,7 +52,7 @@
 extern "C" {
 #endif
 
-#define LOADID_YAML_MAX_DEPTH 64                /* nested collections */
+#define LOADID_YAML_MAX_DEPTH 64                  /* nested collections */
 #define LOADID_YAML_MAX_BYTES (64u * 1024 * 1024) /* size of one file */
 
 typedef enum {
@@ -78,8 +78,8 @@ int loadid_yaml_load_file(const char *path, loadid_yaml_doc_t **out, char *err, 
 
 /* The same on text (len bytes, need not be NUL-terminated); name stands for
  * the file name in messages. Returns 0, -EINVAL or -ENOMEM. */
-int loadid_yaml_load_string(const char *name, const char *text, size_t len,
-                            loadid_yaml_doc_t **out, char *err, size_t errlen);
+int loadid_yaml_load_string(const char *name, const char *text, size_t len, loadid_yaml_doc_t **out,
+                            char *err, size_t errlen);
 
 void loadid_yaml_free(loadid_yaml_doc_t *doc);
 
@@ -143,10 +143,10 @@ int loadid_yaml_fail(const loadid_yaml_node_t *node, const char *fmt, ...)
 
 /* A key no lookup asked for. */
 typedef struct {
-    const loadid_yaml_node_t *key;   /* the key (a scalar) */
-    const loadid_yaml_node_t *map;   /* the mapping holding it (the root for a
+    const loadid_yaml_node_t *key; /* the key (a scalar) */
+    const loadid_yaml_node_t *map; /* the mapping holding it (the root for a
                                         top-level key) */
-    const char *suggestion;          /* loadid_yaml_suggest(map, key), or NULL */
+    const char *suggestion;        /* loadid_yaml_suggest(map, key), or NULL */
 } loadid_yaml_unused_t;
 
 /* Calls fn(ctx, &u) for every mapping key, in file order, that no lookup
@@ -159,8 +159,8 @@ int loadid_yaml_each_unused(const loadid_yaml_doc_t *doc,
 /* The same as one line each: fn(ctx, "FILE:LINE: PATH: unknown key,
  * ignored"), with " (did you mean 'KEY'?)" after it when a known key is
  * close. */
-int loadid_yaml_report_unused(const loadid_yaml_doc_t *doc,
-                              void (*fn)(void *ctx, const char *msg), void *ctx);
+int loadid_yaml_report_unused(const loadid_yaml_doc_t *doc, void (*fn)(void *ctx, const char *msg),
+                              void *ctx);
 
 /* Of the keys a reader asked for in mapping map, the one closest to text
  * by edit distance (insertions, deletions, substitutions and swaps of two
@@ -196,8 +196,8 @@ int loadid_yaml_as_string(const loadid_yaml_node_t *node, char *buf, size_t size
  * when min == max, else "expected at least/at most N numbers, got M";
  * an item that is not a finite number fails at that item's own path and
  * line ("key[2]: expected a number, got 'x'"). */
-int loadid_yaml_as_doubles(const loadid_yaml_node_t *node, double *out, size_t min,
-                           size_t max, size_t *count);
+int loadid_yaml_as_doubles(const loadid_yaml_node_t *node, double *out, size_t min, size_t max,
+                           size_t *count);
 
 /* --- Getters: lookup + conversion (1 read, 0 absent, -EINVAL wrong) -------- */
 
@@ -214,8 +214,8 @@ int loadid_yaml_get_string(loadid_yaml_node_t *map, const char *key, char *buf, 
 /* Exactly n numbers. */
 int loadid_yaml_get_doubles(loadid_yaml_node_t *map, const char *key, double *out, size_t n);
 /* min..max numbers, *count of them. */
-int loadid_yaml_get_double_seq(loadid_yaml_node_t *map, const char *key, double *out,
-                               size_t min, size_t max, size_t *count);
+int loadid_yaml_get_double_seq(loadid_yaml_node_t *map, const char *key, double *out, size_t min,
+                               size_t max, size_t *count);
 
 #ifdef __cplusplus
 }

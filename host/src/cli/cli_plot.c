@@ -19,7 +19,9 @@ static int is_file(const char *dir, const char *name) {
            S_ISREG(st.st_mode);
 }
 
-static int is_exec(const char *path) { return access(path, X_OK) == 0; }
+static int is_exec(const char *path) {
+    return access(path, X_OK) == 0;
+}
 
 static int mkdir_p(const char *dir) {
     char buf[PATH_MAX];
@@ -67,16 +69,18 @@ int loadid_cli_plot(const char *prog, const char *config, const char *path, cons
     }
     const char *env = getenv("LOADID_PYTHON");
     snprintf(python, sizeof python, "%s/../../venv/bin/python", here);
-    if (env && *env) snprintf(python, sizeof python, "%s", env);
-    else if (!is_exec(python)) snprintf(python, sizeof python, "python3");
+    if (env && *env)
+        snprintf(python, sizeof python, "%s", env);
+    else if (!is_exec(python))
+        snprintf(python, sizeof python, "python3");
 
     struct stat st;
     if (stat(path, &st) != 0) {
         fprintf(stderr, "%s: plot: %s: %s\n", prog, path, strerror(errno));
         return 1;
     }
-    const int recording = S_ISDIR(st.st_mode) && is_file(path, "can.log") &&
-                          is_file(path, "lcm.log");
+    const int recording =
+        S_ISDIR(st.st_mode) && is_file(path, "can.log") && is_file(path, "lcm.log");
     char outdir[PATH_MAX], trace[PATH_MAX + 16], result[PATH_MAX + 16], truth[PATH_MAX + 16];
     char every[32];
     const char *args[16];
@@ -85,8 +89,10 @@ int loadid_cli_plot(const char *prog, const char *config, const char *path, cons
     args[k++] = script;
     if (recording) {
         if (!config) {
-            fprintf(stderr, "%s: plot: %s is a recording: give the configuration to estimate it "
-                            "with (--config FILE)\n", prog, path);
+            fprintf(stderr,
+                    "%s: plot: %s is a recording: give the configuration to estimate it "
+                    "with (--config FILE)\n",
+                    prog, path);
             return 2;
         }
         snprintf(outdir, sizeof outdir, "%s", out ? out : path);
@@ -101,8 +107,8 @@ int loadid_cli_plot(const char *prog, const char *config, const char *path, cons
         snprintf(trace, sizeof trace, "%s/trace.csv", outdir);
         snprintf(result, sizeof result, "%s/result.json", outdir);
         snprintf(every, sizeof every, "%d", publish_every);
-        const char *d[16] = {loadidd, "--config", config, "--offline", path, "--trace", trace,
-                             "--result", result, "--allow-incomplete"};
+        const char *d[16] = {loadidd,   "--config", config,     "--offline", path,
+                             "--trace", trace,      "--result", result,      "--allow-incomplete"};
         int j = 10;
         if (publish_every > 0) d[j++] = "--publish-every", d[j++] = every;
         d[j] = NULL;
@@ -133,7 +139,9 @@ int loadid_cli_plot(const char *prog, const char *config, const char *path, cons
     args[k] = NULL;
     fflush(stdout);
     execvp(args[0], (char *const *)args);
-    fprintf(stderr, "%s: plot: cannot run %s: %s (LOADID_PYTHON names a Python with numpy and "
-                    "matplotlib)\n", prog, args[0], strerror(errno));
+    fprintf(stderr,
+            "%s: plot: cannot run %s: %s (LOADID_PYTHON names a Python with numpy and "
+            "matplotlib)\n",
+            prog, args[0], strerror(errno));
     return 1;
 }

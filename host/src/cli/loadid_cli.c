@@ -81,28 +81,41 @@ static int64_t now_us(void) {
 
 /* What the wait has seen. */
 typedef struct {
-    int action;          /* 0: status (any status_t will do) */
-    int64_t sent;        /* the command's utime */
-    int statuses;        /* status_t received */
-    int state;           /* the last one's state */
-    int done;            /* the wait is over: the expected state, or FAILED */
+    int action;   /* 0: status (any status_t will do) */
+    int64_t sent; /* the command's utime */
+    int statuses; /* status_t received */
+    int state;    /* the last one's state */
+    int done;     /* the wait is over: the expected state, or FAILED */
     loadid_status_t last;
 } wait_t;
 
-enum { ZERO = LOADID_COMMAND_T_ZERO, START = LOADID_COMMAND_T_START,
-       STOP = LOADID_COMMAND_T_STOP, RESET = LOADID_COMMAND_T_RESET };
-enum { IDLE = LOADID_ESTIMATE_T_IDLE, ZEROING = LOADID_ESTIMATE_T_ZEROING,
-       ESTIMATING = LOADID_ESTIMATE_T_ESTIMATING, DONE = LOADID_ESTIMATE_T_DONE,
-       FAILED = LOADID_ESTIMATE_T_FAILED };
+enum {
+    ZERO = LOADID_COMMAND_T_ZERO,
+    START = LOADID_COMMAND_T_START,
+    STOP = LOADID_COMMAND_T_STOP,
+    RESET = LOADID_COMMAND_T_RESET
+};
+enum {
+    IDLE = LOADID_ESTIMATE_T_IDLE,
+    ZEROING = LOADID_ESTIMATE_T_ZEROING,
+    ESTIMATING = LOADID_ESTIMATE_T_ESTIMATING,
+    DONE = LOADID_ESTIMATE_T_DONE,
+    FAILED = LOADID_ESTIMATE_T_FAILED
+};
 
 /* The state a command's effect shows as. */
 static int expected_state(int action) {
     switch (action) {
-        case ZERO: return ZEROING;
-        case START: return ESTIMATING;
-        case STOP: return DONE;
-        case RESET: return IDLE;
-        default: return -1;
+        case ZERO:
+            return ZEROING;
+        case START:
+            return ESTIMATING;
+        case STOP:
+            return DONE;
+        case RESET:
+            return IDLE;
+        default:
+            return -1;
     }
 }
 
@@ -126,13 +139,14 @@ static void on_status(const lcm_recv_buf_t *rbuf, const char *channel, const loa
 }
 
 static void print_status(const loadid_status_t *m) {
-    printf("state %s\nsamples_ok %lld\nframes_bad %lld\nsamples_incomplete %lld\n"
-           "samples_saturated %lld\nsequence_gaps %lld\njoint_msgs_bad %lld\n"
-           "loop_us p50 %.1f p99 %.1f max %.1f\n",
-           loadid_lcm_state_name(m->state), (long long)m->samples_ok, (long long)m->frames_bad,
-           (long long)m->samples_incomplete, (long long)m->samples_saturated,
-           (long long)m->sequence_gaps, (long long)m->joint_msgs_bad, m->loop_us_p50,
-           m->loop_us_p99, m->loop_us_max);
+    printf(
+        "state %s\nsamples_ok %lld\nframes_bad %lld\nsamples_incomplete %lld\n"
+        "samples_saturated %lld\nsequence_gaps %lld\njoint_msgs_bad %lld\n"
+        "loop_us p50 %.1f p99 %.1f max %.1f\n",
+        loadid_lcm_state_name(m->state), (long long)m->samples_ok, (long long)m->frames_bad,
+        (long long)m->samples_incomplete, (long long)m->samples_saturated,
+        (long long)m->sequence_gaps, (long long)m->joint_msgs_bad, m->loop_us_p50, m->loop_us_p99,
+        m->loop_us_max);
 }
 
 /* Why a command did not show its effect, given the state loadidd is in
@@ -149,16 +163,23 @@ int main(int argc, char **argv) {
     const char *config_path = NULL, *url = NULL, *load_name = "", *out = NULL;
     double timeout = 3;
     int publish_every = 0;
-    static const struct option opts[] = {
-        {"config", required_argument, NULL, 'c'}, {"lcm-url", required_argument, NULL, 'u'},
-        {"load-name", required_argument, NULL, 'n'}, {"timeout", required_argument, NULL, 't'},
-        {"out", required_argument, NULL, 'o'}, {"publish-every", required_argument, NULL, 'p'},
-        {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0}};
+    static const struct option opts[] = {{"config", required_argument, NULL, 'c'},
+                                         {"lcm-url", required_argument, NULL, 'u'},
+                                         {"load-name", required_argument, NULL, 'n'},
+                                         {"timeout", required_argument, NULL, 't'},
+                                         {"out", required_argument, NULL, 'o'},
+                                         {"publish-every", required_argument, NULL, 'p'},
+                                         {"help", no_argument, NULL, 'h'},
+                                         {NULL, 0, NULL, 0}};
     int c;
     while ((c = getopt_long(argc, argv, "c:u:n:t:h", opts, NULL)) != -1) {
         switch (c) {
-            case 'c': config_path = optarg; break;
-            case 'o': out = optarg; break;
+            case 'c':
+                config_path = optarg;
+                break;
+            case 'o':
+                out = optarg;
+                break;
             case 'p': {
                 char *end;
                 const long v = strtol(optarg, &end, 10);
@@ -169,20 +190,27 @@ int main(int argc, char **argv) {
                 publish_every = (int)v;
                 break;
             }
-            case 'u': url = optarg; break;
-            case 'n': load_name = optarg; break;
+            case 'u':
+                url = optarg;
+                break;
+            case 'n':
+                load_name = optarg;
+                break;
             case 't': {
                 char *end;
                 timeout = strtod(optarg, &end);
                 if (*end || end == optarg || !(timeout > 0) || timeout > 3600) {
-                    fprintf(stderr, "%s: --timeout: seconds in (0, 3600], not %s\n", prog,
-                            optarg);
+                    fprintf(stderr, "%s: --timeout: seconds in (0, 3600], not %s\n", prog, optarg);
                     return 2;
                 }
                 break;
             }
-            case 'h': usage(stdout); return 0;
-            default: usage(stderr); return 2;
+            case 'h':
+                usage(stdout);
+                return 0;
+            default:
+                usage(stderr);
+                return 2;
         }
     }
     if (optind < argc && strcmp(argv[optind], "plot") == 0) {
@@ -202,8 +230,8 @@ int main(int argc, char **argv) {
         return 2;
     }
     const char *verb = argv[optind];
-    static const char *const verbs[] = {[ZERO] = "zero", [START] = "start", [STOP] = "stop",
-                                        [RESET] = "reset"};
+    static const char *const verbs[] = {
+        [ZERO] = "zero", [START] = "start", [STOP] = "stop", [RESET] = "reset"};
     int action = 0;
     for (int i = ZERO; i <= RESET; ++i)
         if (strcmp(verb, verbs[i]) == 0) action = i;
@@ -215,8 +243,7 @@ int main(int argc, char **argv) {
     static loadid_config_t cfg;
     loadid_config_default(&cfg);
     char err[1024];
-    if (config_path &&
-        loadid_config_load(config_path, &cfg, err, sizeof err, warn, NULL) != 0) {
+    if (config_path && loadid_config_load(config_path, &cfg, err, sizeof err, warn, NULL) != 0) {
         fprintf(stderr, "%s: %s\n", prog, err);
         return 1;
     }
@@ -236,8 +263,8 @@ int main(int argc, char **argv) {
     const int fd = lcm_get_fileno(lcm);
     int rc = 0;
     if (action) {
-        loadid_command_t m = {.utime = w.sent, .action = (int8_t)action,
-                              .load_name = (char *)load_name};
+        loadid_command_t m = {
+            .utime = w.sent, .action = (int8_t)action, .load_name = (char *)load_name};
         if (loadid_command_t_publish(lcm, command, &m) != 0) {
             fprintf(stderr, "%s: cannot publish on %s at %s\n", prog, command, lcm_url);
             loadid_status_t_unsubscribe(lcm, sub);
@@ -252,8 +279,9 @@ int main(int argc, char **argv) {
         if (poll(&pfd, 1, ms) > 0) lcm_handle(lcm);
     }
     if (!w.statuses) {
-        fprintf(stderr, "%s: %s: no answer: no status_t on %s at %s within %.3g s (is loadidd "
-                        "running, with the same lcm.url and lcm.channel_prefix?)\n",
+        fprintf(stderr,
+                "%s: %s: no answer: no status_t on %s at %s within %.3g s (is loadidd "
+                "running, with the same lcm.url and lcm.channel_prefix?)\n",
                 prog, verb, status, lcm_url, timeout);
         rc = 1;
     } else if (!action) {
@@ -265,9 +293,11 @@ int main(int argc, char **argv) {
                 no_effect_hint(action, w.state));
         rc = 1;
     } else {
-        fprintf(stderr, "%s: %s: loadidd is running (state %s) but did not act on it within "
-                        "%.3g s%s\n",
-                prog, verb, loadid_lcm_state_name(w.state), timeout, no_effect_hint(action, w.state));
+        fprintf(stderr,
+                "%s: %s: loadidd is running (state %s) but did not act on it within "
+                "%.3g s%s\n",
+                prog, verb, loadid_lcm_state_name(w.state), timeout,
+                no_effect_hint(action, w.state));
         rc = 1;
     }
     loadid_status_t_unsubscribe(lcm, sub);

@@ -270,16 +270,19 @@ static int resolve_path(const loadid_yaml_node_t *n, const char *config_path, co
     return 0;
 }
 
-#define TRY(expr)                                                                                \
-    do {                                                                                         \
-        if ((expr) < 0) goto fail;                                                               \
+#define TRY(expr)                  \
+    do {                           \
+        if ((expr) < 0) goto fail; \
     } while (0)
 
 static const char *kind_name(const loadid_yaml_node_t *n) {
     switch (loadid_yaml_kind(n)) {
-        case LOADID_YAML_MAPPING: return "a mapping";
-        case LOADID_YAML_SEQUENCE: return "a sequence";
-        default: return "a scalar";
+        case LOADID_YAML_MAPPING:
+            return "a mapping";
+        case LOADID_YAML_SEQUENCE:
+            return "a sequence";
+        default:
+            return "a scalar";
     }
 }
 
@@ -355,12 +358,15 @@ static int read_command_sources(loadid_yaml_node_t *seq, loadid_config_t *c) {
         if (loadid_yaml_as_string(item, text, sizeof text)) return -EINVAL;
         const int rc = loadid_ipv4_net_parse(text, &nets[i]);
         if (rc == -ERANGE)
-            return loadid_yaml_fail(item, "'%s' has bits set after its prefix length; the block "
-                                          "is %s", text,
-                                    loadid_ipv4_net_format(&nets[i], fixed, sizeof fixed));
+            return loadid_yaml_fail(item,
+                                    "'%s' has bits set after its prefix length; the block "
+                                    "is %s",
+                                    text, loadid_ipv4_net_format(&nets[i], fixed, sizeof fixed));
         if (rc < 0)
-            return loadid_yaml_fail(item, "expected an IPv4 address (a.b.c.d) or block "
-                                          "(a.b.c.d/n, n 0..32), got '%s'", text);
+            return loadid_yaml_fail(item,
+                                    "expected an IPv4 address (a.b.c.d) or block "
+                                    "(a.b.c.d/n, n 0..32), got '%s'",
+                                    text);
     }
     memcpy(c->lcm_command_sources, nets, count * sizeof nets[0]);
     c->lcm_num_command_sources = (int)count;
@@ -402,8 +408,10 @@ static int read_can_jr3_lcm(loadid_yaml_node_t *root, loadid_config_t *c) {
         TRY(loadid_yaml_as_string(n, url, sizeof url));
         const char *sep = strstr(url, "://");
         if (!sep || sep == url)
-            return loadid_yaml_fail(n, "expected an LCM URL such as "
-                                       "udpm://239.255.76.67:7667?ttl=0, got '%s'", url);
+            return loadid_yaml_fail(n,
+                                    "expected an LCM URL such as "
+                                    "udpm://239.255.76.67:7667?ttl=0, got '%s'",
+                                    url);
         snprintf(c->lcm_url, sizeof c->lcm_url, "%s", url);
     }
     if ((n = loadid_yaml_get(s, "channel_prefix")) && !loadid_yaml_is_null(n)) {
@@ -411,8 +419,10 @@ static int read_can_jr3_lcm(loadid_yaml_node_t *root, loadid_config_t *c) {
         TRY(loadid_yaml_as_string(n, prefix, sizeof prefix));
         for (const char *ch = prefix; *ch; ++ch)
             if (!isalnum((unsigned char)*ch) && !strchr("_-./", *ch))
-                return loadid_yaml_fail(n, "a channel name prefix of letters, digits, '_', '-', "
-                                           "'.' and '/' only, got '%s'", prefix);
+                return loadid_yaml_fail(n,
+                                        "a channel name prefix of letters, digits, '_', '-', "
+                                        "'.' and '/' only, got '%s'",
+                                        prefix);
         snprintf(c->lcm_channel_prefix, sizeof c->lcm_channel_prefix, "%s", prefix);
     }
     if (loadid_yaml_get(s, "command_sources")) {
@@ -608,8 +618,9 @@ static int read_sensor_modbus(loadid_yaml_node_t *root, loadid_config_t *c) {
         int baud;
         TRY(loadid_yaml_as_int(n, &baud));
         if (!loadid_modbus_ft_baud_supported(baud))
-            return loadid_yaml_fail(n, "unsupported baud rate %d (one of 1200, 2400, 4800, 9600, "
-                                       "19200, 38400, 57600, 115200, 230400, 460800, 921600, ...)",
+            return loadid_yaml_fail(n,
+                                    "unsupported baud rate %d (one of 1200, 2400, 4800, 9600, "
+                                    "19200, 38400, 57600, 115200, 230400, 460800, 921600, ...)",
                                     baud);
         c->modbus_baud = baud;
     }
@@ -654,8 +665,8 @@ static int read_trajectory(loadid_yaml_node_t *root, loadid_config_t *c) {
             first_present(loadid_yaml_get(s, "harmonics"), loadid_yaml_get(s, "base_frequency"),
                           loadid_yaml_get(s, "max_frequency")),
             "%d harmonics of %g Hz reach %g Hz, above trajectory.max_frequency %g Hz",
-            c->traj_harmonics, c->traj_base_frequency,
-            c->traj_harmonics * c->traj_base_frequency, c->traj_max_frequency);
+            c->traj_harmonics, c->traj_base_frequency, c->traj_harmonics * c->traj_base_frequency,
+            c->traj_max_frequency);
     }
     TRY(read_number(s, "active_s", &c->traj_active_s, POSITIVE));
     TRY(read_number(s, "fade_s", &c->traj_fade_s, NON_NEGATIVE));
@@ -680,8 +691,10 @@ static int read_trajectory(loadid_yaml_node_t *root, loadid_config_t *c) {
     if ((n = loadid_yaml_get(s, "vel_scale"))) {
         TRY(read_number(s, "vel_scale", &c->traj_vel_scale, POSITIVE));
         if (c->traj_vel_scale > 1)
-            return loadid_yaml_fail(n, "a fraction of the URDF velocity limits: must be <= 1, "
-                                       "got %g", c->traj_vel_scale);
+            return loadid_yaml_fail(n,
+                                    "a fraction of the URDF velocity limits: must be <= 1, "
+                                    "got %g",
+                                    c->traj_vel_scale);
     }
     TRY(read_section(s, "workspace", &ws));
     TRY(read_numbers(ws, "min", c->traj_workspace_min, 3, 3, NULL, ANY));
@@ -691,7 +704,7 @@ static int read_trajectory(loadid_yaml_node_t *root, loadid_config_t *c) {
         return loadid_yaml_fail(
             first_present(loadid_yaml_get(ws, "min"), loadid_yaml_get(ws, "max"), NULL),
             "workspace min must be below max on every axis: %c: min %g >= max %g", "xyz"[i],
-            c->traj_workspace_min[i], c->traj_workspace_max[i]);
+            c -> traj_workspace_min[i], c -> traj_workspace_max[i]);
     }
     TRY(read_number(s, "floor_z", &c->traj_floor_z, ANY));
     TRY(read_number(s, "floor_clearance", &c->traj_floor_clearance, NON_NEGATIVE));
@@ -699,7 +712,8 @@ static int read_trajectory(loadid_yaml_node_t *root, loadid_config_t *c) {
     TRY(read_int(s, "candidates", &c->traj_candidates, 1));
     if (c->traj_candidates > c->traj_monte_carlo) {
         return loadid_yaml_fail(
-            first_present(loadid_yaml_get(s, "candidates"), loadid_yaml_get(s, "monte_carlo"), NULL),
+            first_present(loadid_yaml_get(s, "candidates"), loadid_yaml_get(s, "monte_carlo"),
+                          NULL),
             "%d candidates to optimise out of %d random ones: candidates must be <= monte_carlo",
             c->traj_candidates, c->traj_monte_carlo);
     }
@@ -732,8 +746,10 @@ static int read_simulation(loadid_yaml_node_t *root, loadid_config_t *c) {
     if (scale) {
         TRY(read_number(s, "trajectory_scale", &c->sim_trajectory_scale, POSITIVE));
         if (c->sim_trajectory_scale > 1)
-            return loadid_yaml_fail(scale, "a fraction of the trajectory's amplitude: must "
-                                           "be <= 1, got %g", c->sim_trajectory_scale);
+            return loadid_yaml_fail(scale,
+                                    "a fraction of the trajectory's amplitude: must "
+                                    "be <= 1, got %g",
+                                    c->sim_trajectory_scale);
     }
     TRY(read_uint64(s, "seed", &c->sim_seed));
     /* The simulated noise: simulation.noise, else the noise.* numbers. */
@@ -769,8 +785,8 @@ static void forward_warning(void *ctx, const char *msg) {
 typedef struct {
     const loadid_yaml_node_t *root;
     const char *file;
-    warn_sink_t *sink;              /* NULL: the error pass */
-    int failed;                     /* the error is in the document */
+    warn_sink_t *sink; /* NULL: the error pass */
+    int failed;        /* the error is in the document */
 } unknown_check_t;
 
 static void check_unknown(void *ctx, const loadid_yaml_unused_t *u) {
@@ -815,8 +831,10 @@ static int load_doc(loadid_yaml_doc_t *doc, const char *path, loadid_config_t *c
     warn_sink_t sink = {warn, warn_ctx};
     if (!root) {
         char msg[LOADID_PATH_MAX + 96];
-        snprintf(msg, sizeof msg, "%s:1: (top level): empty configuration, every key takes its "
-                                  "default", path);
+        snprintf(msg, sizeof msg,
+                 "%s:1: (top level): empty configuration, every key takes its "
+                 "default",
+                 path);
         forward_warning(&sink, msg);
     } else if (loadid_yaml_kind(root) != LOADID_YAML_MAPPING) {
         loadid_yaml_fail(root, "expected a mapping of sections (robot:, can:, ...), got %s",
@@ -861,9 +879,9 @@ int loadid_config_load(const char *path, loadid_config_t *cfg, char *err, size_t
     return load_doc(doc, path, cfg, err, errlen, warn, warn_ctx);
 }
 
-int loadid_config_load_string(const char *path, const char *text, size_t len,
-                              loadid_config_t *cfg, char *err, size_t errlen,
-                              loadid_config_warn_fn warn, void *warn_ctx) {
+int loadid_config_load_string(const char *path, const char *text, size_t len, loadid_config_t *cfg,
+                              char *err, size_t errlen, loadid_config_warn_fn warn,
+                              void *warn_ctx) {
     if (err && errlen) err[0] = '\0';
     if (!path || (!text && len) || !cfg) {
         if (err && errlen) snprintf(err, errlen, "loadid_config_load_string: invalid argument");

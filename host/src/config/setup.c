@@ -13,8 +13,8 @@ int loadid_setup_load(const char *config_path, loadid_config_t *cfg, loadid_chai
     int rc = config_path ? loadid_config_load(config_path, cfg, err, errlen, warn, warn_ctx) : 0;
     if (rc != 0) return rc;
     char why[1024];
-    rc = loadid_urdf_load_file(cfg->robot_urdf, cfg->robot_base_link, cfg->robot_sensor_link,
-                               chain, why, sizeof why);
+    rc = loadid_urdf_load_file(cfg->robot_urdf, cfg->robot_base_link, cfg->robot_sensor_link, chain,
+                               why, sizeof why);
     /* The key and line that named the file: the URDF reader knows only
      * the file. */
     if (rc != 0) snprintf(err, errlen, "%s: %s", cfg->robot_urdf_origin, why);

@@ -23,17 +23,17 @@
 
 struct loadid_yaml_node {
     loadid_yaml_kind_t kind;
-    int line;                     /* 1-based */
-    int used;                     /* a mapping value asked for by a reader */
-    int plain;                    /* scalar: plain style and no !!str tag */
-    char *text;                   /* scalar: value, NUL-terminated */
-    size_t length;                /* scalar: bytes in text */
-    loadid_yaml_node_t **child;   /* sequence: items; mapping: k0, v0, k1, v1... */
-    size_t count, cap;            /* pointers in child */
-    loadid_yaml_node_t *parent;   /* NULL for the root */
+    int line;                      /* 1-based */
+    int used;                      /* a mapping value asked for by a reader */
+    int plain;                     /* scalar: plain style and no !!str tag */
+    char *text;                    /* scalar: value, NUL-terminated */
+    size_t length;                 /* scalar: bytes in text */
+    loadid_yaml_node_t **child;    /* sequence: items; mapping: k0, v0, k1, v1... */
+    size_t count, cap;             /* pointers in child */
+    loadid_yaml_node_t *parent;    /* NULL for the root */
     const loadid_yaml_node_t *key; /* in a mapping (key and value): the key */
-    size_t index;                 /* in a sequence: the item's index */
-    char **asked;                 /* mapping: every key a reader looked up,
+    size_t index;                  /* in a sequence: the item's index */
+    char **asked;                  /* mapping: every key a reader looked up,
                                      present or not (for "did you mean") */
     size_t n_asked, cap_asked;
     loadid_yaml_doc_t *doc;
@@ -282,7 +282,9 @@ static int build(loadid_yaml_doc_t *doc, const char *text, size_t len) {
         const int line = clamp_line(ev.start_mark.line);
         loadid_yaml_node_t *node = NULL;
         switch (ev.type) {
-            case YAML_STREAM_END_EVENT: done = 1; break;
+            case YAML_STREAM_END_EVENT:
+                done = 1;
+                break;
             case YAML_DOCUMENT_START_EVENT:
                 if (++documents > 1)
                     rc = fail_line(doc, line, kTopLevel,
@@ -316,7 +318,10 @@ static int build(loadid_yaml_doc_t *doc, const char *text, size_t len) {
                                                     ? LOADID_YAML_MAPPING
                                                     : LOADID_YAML_SEQUENCE;
                 node = new_node(doc, kind, &ev.start_mark);
-                if (!node) { rc = out_of_memory(doc); break; }
+                if (!node) {
+                    rc = out_of_memory(doc);
+                    break;
+                }
                 rc = attach(doc, stack, depth, node);
                 if (rc == 0 && depth == LOADID_YAML_MAX_DEPTH)
                     rc = loadid_yaml_fail(node, "nested deeper than %d levels",
@@ -328,7 +333,8 @@ static int build(loadid_yaml_doc_t *doc, const char *text, size_t len) {
             case YAML_MAPPING_END_EVENT:
                 if (depth > 0) --depth;
                 break;
-            default: break; /* stream start, document end */
+            default:
+                break; /* stream start, document end */
         }
         yaml_event_delete(&ev);
     }
@@ -337,8 +343,8 @@ static int build(loadid_yaml_doc_t *doc, const char *text, size_t len) {
     return rc;
 }
 
-int loadid_yaml_load_string(const char *name, const char *text, size_t len,
-                            loadid_yaml_doc_t **out, char *err, size_t errlen) {
+int loadid_yaml_load_string(const char *name, const char *text, size_t len, loadid_yaml_doc_t **out,
+                            char *err, size_t errlen) {
     if (out) *out = NULL;
     if (!name || (!text && len) || !out) {
         if (err && errlen) snprintf(err, errlen, "loadid_yaml_load_string: invalid argument");
@@ -377,12 +383,18 @@ int loadid_yaml_load_file(const char *path, loadid_yaml_doc_t **out, char *err, 
     int e = 0;
     for (;;) {
         char *more = grow(buf, &cap, len + 65536, 1);
-        if (!more) { e = ENOMEM; break; }
+        if (!more) {
+            e = ENOMEM;
+            break;
+        }
         buf = more;
         errno = 0;
         const size_t got = fread(buf + len, 1, cap - len, f);
         len += got;
-        if (len > LOADID_YAML_MAX_BYTES) { e = EFBIG; break; }
+        if (len > LOADID_YAML_MAX_BYTES) {
+            e = EFBIG;
+            break;
+        }
         if (got == 0) {
             if (ferror(f)) e = errno ? errno : EIO;
             break;
@@ -420,14 +432,24 @@ void loadid_yaml_free(loadid_yaml_doc_t *doc) {
     free(doc);
 }
 
-loadid_yaml_node_t *loadid_yaml_root(const loadid_yaml_doc_t *doc) { return doc ? doc->root : NULL; }
-const char *loadid_yaml_file(const loadid_yaml_doc_t *doc) { return doc ? doc->file : NULL; }
-const char *loadid_yaml_error(const loadid_yaml_doc_t *doc) { return doc ? doc->error : ""; }
+loadid_yaml_node_t *loadid_yaml_root(const loadid_yaml_doc_t *doc) {
+    return doc ? doc->root : NULL;
+}
+const char *loadid_yaml_file(const loadid_yaml_doc_t *doc) {
+    return doc ? doc->file : NULL;
+}
+const char *loadid_yaml_error(const loadid_yaml_doc_t *doc) {
+    return doc ? doc->error : "";
+}
 
 /* --- Nodes ---------------------------------------------------------------- */
 
-loadid_yaml_kind_t loadid_yaml_kind(const loadid_yaml_node_t *node) { return node->kind; }
-int loadid_yaml_line(const loadid_yaml_node_t *node) { return node->line; }
+loadid_yaml_kind_t loadid_yaml_kind(const loadid_yaml_node_t *node) {
+    return node->kind;
+}
+int loadid_yaml_line(const loadid_yaml_node_t *node) {
+    return node->line;
+}
 
 size_t loadid_yaml_count(const loadid_yaml_node_t *node) {
     if (!node) return 0;
@@ -457,7 +479,9 @@ const char *loadid_yaml_scalar(const loadid_yaml_node_t *node, size_t *len) {
     return node->text;
 }
 
-int loadid_yaml_is_null(const loadid_yaml_node_t *node) { return node && is_null_scalar(node); }
+int loadid_yaml_is_null(const loadid_yaml_node_t *node) {
+    return node && is_null_scalar(node);
+}
 
 /* Remembers key as one a reader knows in map. Out of memory, it is not
  * remembered: only a suggestion is lost. */
@@ -515,7 +539,9 @@ static size_t edit_distance(const char *a, size_t la, const char *b, size_t lb, 
  * edit in names of up to 4 characters, two up to 8, three beyond; and
  * never as many edits as the typed name has characters ("x" is no typo of
  * "cpu"). */
-static size_t edit_limit(size_t known_len) { return known_len <= 4 ? 1 : known_len <= 8 ? 2 : 3; }
+static size_t edit_limit(size_t known_len) {
+    return known_len <= 4 ? 1 : known_len <= 8 ? 2 : 3;
+}
 
 const char *loadid_yaml_suggest(const loadid_yaml_node_t *map, const char *text) {
     if (!map || !text || map->kind != LOADID_YAML_MAPPING) return NULL;
@@ -588,15 +614,17 @@ static void report_one(void *ctx, const loadid_yaml_unused_t *u) {
     r->fn(r->ctx, msg);
 }
 
-int loadid_yaml_report_unused(const loadid_yaml_doc_t *doc,
-                              void (*fn)(void *ctx, const char *msg), void *ctx) {
+int loadid_yaml_report_unused(const loadid_yaml_doc_t *doc, void (*fn)(void *ctx, const char *msg),
+                              void *ctx) {
     report_sink_t r = {fn, ctx};
     return loadid_yaml_each_unused(doc, fn ? report_one : NULL, &r);
 }
 
 /* --- Typed conversions ---------------------------------------------------- */
 
-static int is_digit(char c) { return c >= '0' && c <= '9'; }
+static int is_digit(char c) {
+    return c >= '0' && c <= '9';
+}
 
 static int hex_value(char c) {
     if (c >= '0' && c <= '9') return c - '0';
@@ -676,11 +704,14 @@ static int parse_integer(const loadid_yaml_node_t *node, int *negative, uint64_t
     for (; *s; ++s, ++digits) {
         const int d = base == 16 ? hex_value(*s) : (is_digit(*s) ? *s - '0' : -1);
         if (d < 0) break;
-        if (m > (UINT64_MAX - (uint64_t)d) / (uint64_t)base) overflow = 1;
-        else m = m * (uint64_t)base + (uint64_t)d;
+        if (m > (UINT64_MAX - (uint64_t)d) / (uint64_t)base)
+            overflow = 1;
+        else
+            m = m * (uint64_t)base + (uint64_t)d;
     }
     if (*s || digits == 0)
-        return loadid_yaml_fail(node, "expected an integer, got %s", describe(node, buf, sizeof buf));
+        return loadid_yaml_fail(node, "expected an integer, got %s",
+                                describe(node, buf, sizeof buf));
     if (overflow)
         return loadid_yaml_fail(node, "integer out of range: %s", describe(node, buf, sizeof buf));
     *magnitude = m;
@@ -718,11 +749,18 @@ int loadid_yaml_as_bool(const loadid_yaml_node_t *node, int *out) {
     static const char *const kTrue[] = {"true", "True", "TRUE"};
     static const char *const kFalse[] = {"false", "False", "FALSE"};
     for (size_t i = 0; i < 3; ++i) {
-        if (!strcmp(node->text, kTrue[i])) { *out = 1; return 0; }
-        if (!strcmp(node->text, kFalse[i])) { *out = 0; return 0; }
+        if (!strcmp(node->text, kTrue[i])) {
+            *out = 1;
+            return 0;
+        }
+        if (!strcmp(node->text, kFalse[i])) {
+            *out = 0;
+            return 0;
+        }
     }
     char buf[96];
-    return loadid_yaml_fail(node, "expected true or false, got %s", describe(node, buf, sizeof buf));
+    return loadid_yaml_fail(node, "expected true or false, got %s",
+                            describe(node, buf, sizeof buf));
 }
 
 int loadid_yaml_as_string(const loadid_yaml_node_t *node, char *buf, size_t size) {
@@ -777,12 +815,12 @@ static loadid_yaml_node_t *lookup(loadid_yaml_node_t *map, const char *key, int 
     return loadid_yaml_get(map, key);
 }
 
-#define LOADID_YAML_GETTER(name, type, conversion)                                              \
-    int name(loadid_yaml_node_t *map, const char *key, type *out) {                             \
-        int rc;                                                                                 \
-        loadid_yaml_node_t *n = lookup(map, key, &rc);                                          \
-        if (!n) return rc;                                                                      \
-        return conversion(n, out) ? -EINVAL : 1;                                                \
+#define LOADID_YAML_GETTER(name, type, conversion)                  \
+    int name(loadid_yaml_node_t *map, const char *key, type *out) { \
+        int rc;                                                     \
+        loadid_yaml_node_t *n = lookup(map, key, &rc);              \
+        if (!n) return rc;                                          \
+        return conversion(n, out) ? -EINVAL : 1;                    \
     }
 
 LOADID_YAML_GETTER(loadid_yaml_get_double, double, loadid_yaml_as_double)
@@ -826,8 +864,8 @@ int loadid_yaml_get_doubles(loadid_yaml_node_t *map, const char *key, double *ou
     return loadid_yaml_get_double_seq(map, key, out, n, n, NULL);
 }
 
-int loadid_yaml_get_double_seq(loadid_yaml_node_t *map, const char *key, double *out,
-                               size_t min, size_t max, size_t *count) {
+int loadid_yaml_get_double_seq(loadid_yaml_node_t *map, const char *key, double *out, size_t min,
+                               size_t max, size_t *count) {
     int rc;
     loadid_yaml_node_t *n = lookup(map, key, &rc);
     if (!n) return rc;

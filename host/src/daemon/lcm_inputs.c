@@ -66,9 +66,11 @@ static int command_allowed(loadid_lcm_inputs_t *in, uint32_t source) {
         return 1;
     const double now = loadid_mono_us();
     if (in->commands_refused++ == 0 || now - in->refused_warned_us > 1e6) {
-        loadidd_log("%s from %u.%u.%u.%u refused: not in lcm.command_sources (%lld refused so "
-                    "far)", in->command, source >> 24, (source >> 16) & 255, (source >> 8) & 255,
-                    source & 255, (long long)in->commands_refused);
+        loadidd_log(
+            "%s from %u.%u.%u.%u refused: not in lcm.command_sources (%lld refused so "
+            "far)",
+            in->command, source >> 24, (source >> 16) & 255, (source >> 8) & 255, source & 255,
+            (long long)in->commands_refused);
         in->refused_warned_us = now;
     }
     return 0;

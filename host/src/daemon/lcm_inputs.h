@@ -28,10 +28,10 @@ typedef struct {
     double refused_warned_us;     /* throttles their log line */
     struct {
         int64_t acted, sent;
-    } moved[8];                   /* commands whose utime was too far from now:
+    } moved[8]; /* commands whose utime was too far from now:
                                      the time they acted at, and their own */
     int moved_next;
-    loadid_lcm_joint_state_t js;  /* decoded here: two arrays of 16 doubles */
+    loadid_lcm_joint_state_t js; /* decoded here: two arrays of 16 doubles */
 } loadid_lcm_inputs_t;
 
 void loadid_lcm_inputs_init(loadid_lcm_inputs_t *in, const loadid_config_t *cfg,

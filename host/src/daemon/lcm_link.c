@@ -48,7 +48,8 @@ int loadid_lcm_link_open(loadid_lcm_link_t *l, const loadid_config_t *cfg,
     }
     if (cfg->lcm_num_command_sources > 0) {
         /* liblcm's providers do not say who sent a message. */
-        snprintf(err, errlen, "lcm.command_sources needs a udpm:// lcm.url, not %s", url ? url : "");
+        snprintf(err, errlen, "lcm.command_sources needs a udpm:// lcm.url, not %s",
+                 url ? url : "");
         return -EINVAL;
     }
     if (!(l->lcm = lcm_create(cfg->lcm_url))) {
@@ -79,11 +80,13 @@ int loadid_lcm_link_read(loadid_lcm_link_t *l) {
            l->on_message(l->ctx, channel, data, len, source);
 }
 
-void loadid_lcm_link_publish(loadid_lcm_link_t *l, const char *channel, const uint8_t *buf,
-                             int n) {
-    if (n <= 0) loadidd_log("%s: cannot encode: %s", channel, loadid_lcm_strerror(n));
-    else if (l->udpm) loadid_lcm_udpm_send(&l->tx, channel, buf, (size_t)n);
-    else lcm_publish(l->lcm, channel, buf, (unsigned)n);
+void loadid_lcm_link_publish(loadid_lcm_link_t *l, const char *channel, const uint8_t *buf, int n) {
+    if (n <= 0)
+        loadidd_log("%s: cannot encode: %s", channel, loadid_lcm_strerror(n));
+    else if (l->udpm)
+        loadid_lcm_udpm_send(&l->tx, channel, buf, (size_t)n);
+    else
+        lcm_publish(l->lcm, channel, buf, (unsigned)n);
 }
 
 void loadid_lcm_link_close(loadid_lcm_link_t *l) {

@@ -22,14 +22,14 @@
 /* One message received: its channel, its bytes, and the sender's IPv4
  * address (host order; 0 on liblcm's providers, which do not say).
  * Returns 1 when it was an input (a channel the daemon reads). */
-typedef int (*loadid_lcm_link_fn)(void *ctx, const char *channel, const uint8_t *data,
-                                  size_t len, uint32_t source);
+typedef int (*loadid_lcm_link_fn)(void *ctx, const char *channel, const uint8_t *data, size_t len,
+                                  uint32_t source);
 
 typedef struct {
-    int udpm;                     /* udpm://: the daemon's own sockets; else liblcm */
-    loadid_lcm_udpm_tx_t tx;      /* udpm://: sending */
-    int rx_fd;                    /* udpm://: receiving, or -1 */
-    lcm_t *lcm;                   /* other providers, else NULL */
+    int udpm;                /* udpm://: the daemon's own sockets; else liblcm */
+    loadid_lcm_udpm_tx_t tx; /* udpm://: sending */
+    int rx_fd;               /* udpm://: receiving, or -1 */
+    lcm_t *lcm;              /* other providers, else NULL */
     loadid_lcm_link_fn on_message;
     void *ctx;
 } loadid_lcm_link_t;
@@ -53,8 +53,7 @@ int loadid_lcm_link_read(loadid_lcm_link_t *l);
 
 /* Sends n encoded bytes (what an encoder returned; n <= 0 is an encoder's
  * failure, a bug: logged). */
-void loadid_lcm_link_publish(loadid_lcm_link_t *l, const char *channel, const uint8_t *buf,
-                             int n);
+void loadid_lcm_link_publish(loadid_lcm_link_t *l, const char *channel, const uint8_t *buf, int n);
 
 void loadid_lcm_link_close(loadid_lcm_link_t *l);
 

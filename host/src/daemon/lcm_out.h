@@ -15,8 +15,9 @@
 #include "loadid/pipeline.h"
 
 /* The largest of the three. */
-#define LOADID_LCM_OUT_MAX (LOADID_LCM_ESTIMATE_MAX > LOADID_LCM_LOAD_MODEL_MAX \
-                                ? LOADID_LCM_ESTIMATE_MAX : LOADID_LCM_LOAD_MODEL_MAX)
+#define LOADID_LCM_OUT_MAX                                                         \
+    (LOADID_LCM_ESTIMATE_MAX > LOADID_LCM_LOAD_MODEL_MAX ? LOADID_LCM_ESTIMATE_MAX \
+                                                         : LOADID_LCM_LOAD_MODEL_MAX)
 
 /* estimate_t of one method's estimate. */
 int loadid_lcm_out_estimate(const loadid_pipeline_estimate_t *e, uint8_t *buf, size_t cap);

@@ -69,16 +69,16 @@ typedef struct {
     loadid_lcm_link_t lcm;
     loadid_lcm_inputs_t lcm_in;
     loadid_input_t input;
-    int input_fd;                 /* the input's descriptor in the epoll set, or -1 */
-    int refined_fd;               /* REFINED's worker's end (worker.h), or -1 */
+    int input_fd;   /* the input's descriptor in the epoll set, or -1 */
+    int refined_fd; /* REFINED's worker's end (worker.h), or -1 */
     loadid_loop_times_t times;
     int ticks;
-    int done_pending;             /* DONE reached: save the estimate */
-    loadid_save_worker_t *saver;  /* results.directory set, else NULL */
+    int done_pending;            /* DONE reached: save the estimate */
+    loadid_save_worker_t *saver; /* results.directory set, else NULL */
     struct {
         int64_t utime;
         int8_t state;
-    } changes[8];                 /* states entered since the last event, each
+    } changes[8]; /* states entered since the last event, each
                                      published as a status_t of its own */
     int num_changes;
 } live_t;
@@ -125,9 +125,10 @@ static void publish_status(live_t *L, int periodic, int state, int64_t utime) {
     loadid_input_counters_t in;
     loadid_input_counters(&L->input, &in);
     loadid_lcm_status_t m;
-    loadid_status_make(&st, &in, &L->times, periodic,
-                       periodic ? loadid_wall_us() : loadid_lcm_inputs_answer_utime(&L->lcm_in, utime),
-                       periodic ? st.state : state, &m);
+    loadid_status_make(
+        &st, &in, &L->times, periodic,
+        periodic ? loadid_wall_us() : loadid_lcm_inputs_answer_utime(&L->lcm_in, utime),
+        periodic ? st.state : state, &m);
     publish(L, CH_STATUS, loadid_lcm_encode_status(&m, tx_buf, sizeof tx_buf));
 }
 
@@ -231,18 +232,20 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     const loadid_live_options_t *opt) {
     static live_t L; /* large (the histogram); one per process */
     memset(&L, 0, sizeof L);
-    static const char *const names[CH_COUNT] = {"LOADID_JOINTS", "LOADID_COMMAND",
+    static const char *const names[CH_COUNT] = {"LOADID_JOINTS",   "LOADID_COMMAND",
                                                 "LOADID_ESTIMATE", "LOADID_WRENCH",
-                                                "LOADID_STATUS", "LOADID_MODEL"};
-    for (int i = 0; i < CH_COUNT; ++i) loadid_config_channel(cfg, names[i], channels[i], sizeof channels[i]);
+                                                "LOADID_STATUS",   "LOADID_MODEL"};
+    for (int i = 0; i < CH_COUNT; ++i)
+        loadid_config_channel(cfg, names[i], channels[i], sizeof channels[i]);
     L.cfg = cfg;
     L.opt = opt;
     L.input_fd = -1;
     L.refined_fd = -1;
     char err[4600];
-    loadid_pipeline_sink_t sink = {.ctx = &L, .estimate = on_estimate, .wrench = on_wrench,
-                                   .state = on_state, .log = on_log};
-    if (loadid_pipeline_create(cfg, chain, &sink, opt->publish_every, &L.pipe, err, sizeof err) != 0) {
+    loadid_pipeline_sink_t sink = {
+        .ctx = &L, .estimate = on_estimate, .wrench = on_wrench, .state = on_state, .log = on_log};
+    if (loadid_pipeline_create(cfg, chain, &sink, opt->publish_every, &L.pipe, err, sizeof err) !=
+        0) {
         loadidd_log("%s", err);
         return 1;
     }
@@ -265,7 +268,8 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
             return 1;
         }
         loadidd_log("loaded %s (%s): wrench_t flows", cfg->results_load, e.load_name);
-        if (e.has_model) publish(&L, CH_MODEL, loadid_lcm_out_load_model(&e, tx_buf, sizeof tx_buf));
+        if (e.has_model)
+            publish(&L, CH_MODEL, loadid_lcm_out_load_model(&e, tx_buf, sizeof tx_buf));
     }
 
     sigset_t mask;
@@ -319,7 +323,9 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
             const double t_event = loadid_mono_us();
             int timed = evs[i].data.u32 != TAG_SIGNAL;
             switch (evs[i].data.u32) {
-                case TAG_LCM: timed = loadid_lcm_link_read(&L.lcm); break;
+                case TAG_LCM:
+                    timed = loadid_lcm_link_read(&L.lcm);
+                    break;
                 case TAG_INPUT:
                     loadid_input_read(&L.input);
                     sync_input_fd(&L, ep);
@@ -335,8 +341,12 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                         sync_input_fd(&L, ep);
                     }
                     break;
-                case TAG_SIGNAL: stop = 1; break;
-                case TAG_REFINED: loadid_pipeline_refined_collect(L.pipe); break;
+                case TAG_SIGNAL:
+                    stop = 1;
+                    break;
+                case TAG_REFINED:
+                    loadid_pipeline_refined_collect(L.pipe);
+                    break;
             }
             if (timed) loadid_loop_times_add(&L.times, loadid_mono_us() - t_event);
         }

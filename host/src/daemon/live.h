@@ -7,14 +7,14 @@
 #include "loadid/config.h"
 
 typedef struct {
-    const char *can_file;  /* NULL: SocketCAN on can.interface; else a
+    const char *can_file;   /* NULL: SocketCAN on can.interface; else a
                               candump log replayed in real time */
     int64_t can_file_epoch; /* wall time [us] of the file's first frame;
                                0: now */
-    const char *replay;    /* a recording replayed in real time: its JR3
+    const char *replay;     /* a recording replayed in real time: its JR3
                               frames, joint states and commands (NULL: none) */
-    int replay_commands;   /* with replay: its commands act too */
-    int publish_every;     /* estimate_t after every n-th sample (>= 1) */
+    int replay_commands;    /* with replay: its commands act too */
+    int publish_every;      /* estimate_t after every n-th sample (>= 1) */
     int verbose;
 } loadid_live_options_t;
 

@@ -90,8 +90,8 @@ static void log_line(void *ctx, const char *msg) {
 
 /* The sinks' context offline. */
 typedef struct {
-    loadid_trace_csv_t *trace;            /* NULL without --trace */
-    const loadid_offline_report_t *rep;   /* its t_first_us: the recording's start */
+    loadid_trace_csv_t *trace;          /* NULL without --trace */
+    const loadid_offline_report_t *rep; /* its t_first_us: the recording's start */
 } offline_ctx_t;
 
 /* A state change with its time in seconds since the recording's first
@@ -103,8 +103,7 @@ static void state_line(void *ctx, int64_t utime, int state, const char *reason) 
     const int64_t t0 = c->rep->t_first_us == INT64_MIN ? utime : c->rep->t_first_us;
     if (verbose)
         fprintf(stderr, "%s: %.6f s: %s%s%s\n", prog, (double)(utime - t0) / 1e6,
-                loadid_lcm_state_name(state),
-                *reason ? ": " : "", reason);
+                loadid_lcm_state_name(state), *reason ? ": " : "", reason);
 }
 
 static void trace_row(void *ctx, const loadid_pipeline_estimate_t *e) {
@@ -116,20 +115,25 @@ static void trace_row(void *ctx, const loadid_pipeline_estimate_t *e) {
 static void lcm_warnings(const char *dir, const loadid_offline_report_t *r) {
     const loadid_eventlog_stats_t *l = &r->lcm;
     if (l->damaged)
-        fprintf(stderr, "%s: warning: %s/lcm.log: damaged in %lld place%s, %lld bytes skipped; "
-                "the first: %s\n", prog, dir, (long long)l->damaged, l->damaged == 1 ? "" : "s",
+        fprintf(stderr,
+                "%s: warning: %s/lcm.log: damaged in %lld place%s, %lld bytes skipped; "
+                "the first: %s\n",
+                prog, dir, (long long)l->damaged, l->damaged == 1 ? "" : "s",
                 (long long)l->skipped_bytes, l->first_problem);
     if (l->truncated)
-        fprintf(stderr, "%s: warning: %s/lcm.log: cut short: the file ends inside its last event "
-                "(at byte %lld of %lld)\n", prog, dir, (long long)l->truncated_at, (long long)l->size);
+        fprintf(stderr,
+                "%s: warning: %s/lcm.log: cut short: the file ends inside its last event "
+                "(at byte %lld of %lld)\n",
+                prog, dir, (long long)l->truncated_at, (long long)l->size);
     if (l->oversized)
         fprintf(stderr, "%s: warning: %s/lcm.log: %lld events of more than %u bytes passed over\n",
                 prog, dir, (long long)l->oversized, (unsigned)LOADID_EVENTLOG_DATA_MAX);
     const int64_t bad = r->joint_states_bad + r->commands_bad;
     if (bad)
-        fprintf(stderr, "%s: warning: %s/lcm.log: %lld of %lld joint states and %lld of %lld "
-                "commands could not be decoded; the first: %s\n", prog, dir,
-                (long long)r->joint_states_bad, (long long)r->joint_states,
+        fprintf(stderr,
+                "%s: warning: %s/lcm.log: %lld of %lld joint states and %lld of %lld "
+                "commands could not be decoded; the first: %s\n",
+                prog, dir, (long long)r->joint_states_bad, (long long)r->joint_states,
                 (long long)r->commands_bad, (long long)r->commands, r->first_bad);
 }
 
@@ -267,28 +271,52 @@ int main(int argc, char **argv) {
     int publish_every = 0; /* 0: estimation.publish_every (live), 10 (--trace) */
     int allow_incomplete = 0;
     long long epoch = 0;
-    static const struct option opts[] = {
-        {"config", required_argument, NULL, 'c'}, {"offline", required_argument, NULL, 'o'},
-        {"result", required_argument, NULL, 'r'}, {"verbose", no_argument, NULL, 'v'},
-        {"can-file", required_argument, NULL, 'f'}, {"publish-every", required_argument, NULL, 'p'},
-        {"can-file-epoch", required_argument, NULL, 'e'},
-        {"allow-incomplete", no_argument, NULL, 'a'}, {"trace", required_argument, NULL, 't'},
-        {"replay", required_argument, NULL, 'R'},
-        {"replay-without-commands", no_argument, NULL, 'W'},
-        {"help", no_argument, NULL, 'h'},         {NULL, 0, NULL, 0}};
+    static const struct option opts[] = {{"config", required_argument, NULL, 'c'},
+                                         {"offline", required_argument, NULL, 'o'},
+                                         {"result", required_argument, NULL, 'r'},
+                                         {"verbose", no_argument, NULL, 'v'},
+                                         {"can-file", required_argument, NULL, 'f'},
+                                         {"publish-every", required_argument, NULL, 'p'},
+                                         {"can-file-epoch", required_argument, NULL, 'e'},
+                                         {"allow-incomplete", no_argument, NULL, 'a'},
+                                         {"trace", required_argument, NULL, 't'},
+                                         {"replay", required_argument, NULL, 'R'},
+                                         {"replay-without-commands", no_argument, NULL, 'W'},
+                                         {"help", no_argument, NULL, 'h'},
+                                         {NULL, 0, NULL, 0}};
     int c;
     while ((c = getopt_long(argc, argv, "c:o:r:vh", opts, NULL)) != -1) {
         switch (c) {
-            case 'c': config_path = optarg; break;
-            case 'o': offline = optarg; break;
-            case 'r': result = optarg; break;
-            case 'v': verbose = 1; break;
-            case 'f': can_file = optarg; break;
-            case 'e': epoch = strtoll(optarg, NULL, 10); break;
-            case 'a': allow_incomplete = 1; break;
-            case 't': trace = optarg; break;
-            case 'R': replay = optarg; break;
-            case 'W': replay_commands = 0; break;
+            case 'c':
+                config_path = optarg;
+                break;
+            case 'o':
+                offline = optarg;
+                break;
+            case 'r':
+                result = optarg;
+                break;
+            case 'v':
+                verbose = 1;
+                break;
+            case 'f':
+                can_file = optarg;
+                break;
+            case 'e':
+                epoch = strtoll(optarg, NULL, 10);
+                break;
+            case 'a':
+                allow_incomplete = 1;
+                break;
+            case 't':
+                trace = optarg;
+                break;
+            case 'R':
+                replay = optarg;
+                break;
+            case 'W':
+                replay_commands = 0;
+                break;
             case 'p': {
                 char *end;
                 long v = strtol(optarg, &end, 10);
@@ -299,8 +327,12 @@ int main(int argc, char **argv) {
                 publish_every = (int)v;
                 break;
             }
-            case 'h': usage(stdout); return 0;
-            default: usage(stderr); return 2;
+            case 'h':
+                usage(stdout);
+                return 0;
+            default:
+                usage(stderr);
+                return 2;
         }
     }
     if (optind != argc) {
@@ -344,11 +376,13 @@ int main(int argc, char **argv) {
         return 1;
     }
     if (!offline) {
-        loadid_live_options_t live = {.can_file = can_file, .can_file_epoch = epoch,
-                                      .replay = replay, .replay_commands = replay_commands,
-                                      .publish_every = publish_every ? publish_every
-                                                                     : cfg.publish_every,
-                                      .verbose = verbose};
+        loadid_live_options_t live = {
+            .can_file = can_file,
+            .can_file_epoch = epoch,
+            .replay = replay,
+            .replay_commands = replay_commands,
+            .publish_every = publish_every ? publish_every : cfg.publish_every,
+            .verbose = verbose};
         return loadid_live_run(&cfg, &chain, &live);
     }
     return run_offline(&cfg, &chain, offline, result, trace, publish_every ? publish_every : 10,

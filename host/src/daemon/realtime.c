@@ -52,4 +52,6 @@ void loadid_notify_watchdog(int64_t now_us) {
     watchdog_next_us = now_us + (int64_t)(watchdog_period_us / 2);
 }
 
-void loadid_notify_stopping(void) { sd_notify(0, "STOPPING=1"); }
+void loadid_notify_stopping(void) {
+    sd_notify(0, "STOPPING=1");
+}

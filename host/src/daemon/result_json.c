@@ -81,7 +81,8 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
         array(out, e->inertia_com, 6);
         fputs(",\n   \"condition_number\": ", out);
         number(out, e->condition_number);
-        fprintf(out, ", \"physically_consistent\": %s", e->physically_consistent ? "true" : "false");
+        fprintf(out, ", \"physically_consistent\": %s",
+                e->physically_consistent ? "true" : "false");
         const int model = e->valid && e->has_model;
         fputs(",\n   \"phi_std\": ", out);
         if (model) {

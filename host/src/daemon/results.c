@@ -13,8 +13,10 @@ int loadid_results_restore(const loadid_config_t *cfg, loadid_pipeline_t *pipe,
     loadid_pipeline_compensation_t c;
     int rc = loadid_saved_result_read(cfg->results_load, e, &c, err, errlen);
     if (rc == 0 && loadid_pipeline_restore(pipe, e, &c) != 0) {
-        snprintf(err, errlen, "%s: not an estimate of this configuration (method, "
-                              "estimation.offset_model)", cfg->results_load);
+        snprintf(err, errlen,
+                 "%s: not an estimate of this configuration (method, "
+                 "estimation.offset_model)",
+                 cfg->results_load);
         rc = -EINVAL;
     }
     return rc;

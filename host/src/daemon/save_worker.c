@@ -42,8 +42,10 @@ struct loadid_save_worker {
 static void save(const char *dir, slot_t *s) {
     char path[4400], err[4600];
     s->rc = loadid_saved_result_write(dir, &s->est, &s->comp, path, sizeof path, err, sizeof err);
-    if (s->rc == 0) snprintf(s->msg, sizeof s->msg, "saved %s", path);
-    else snprintf(s->msg, sizeof s->msg, "%s", err);
+    if (s->rc == 0)
+        snprintf(s->msg, sizeof s->msg, "saved %s", path);
+    else
+        snprintf(s->msg, sizeof s->msg, "%s", err);
 }
 
 static void *run(void *arg) {
@@ -62,8 +64,7 @@ static void *run(void *arg) {
             atomic_store_explicit(&w->ended, e + 1, memory_order_release);
         }
         if (quit) break;
-        while (sem_wait(&w->wake) != 0 && errno == EINTR) {
-        }
+        while (sem_wait(&w->wake) != 0 && errno == EINTR) {}
     }
     return NULL;
 }

@@ -30,8 +30,10 @@ __attribute__((format(printf, 2, 3))) static void add(doc_t *d, const char *fmt,
     va_start(ap, fmt);
     const int k = d->over ? 0 : vsnprintf(d->p + d->n, d->cap - d->n, fmt, ap);
     va_end(ap);
-    if (k < 0 || (size_t)k >= d->cap - d->n) d->over = 1;
-    else d->n += (size_t)k;
+    if (k < 0 || (size_t)k >= d->cap - d->n)
+        d->over = 1;
+    else
+        d->n += (size_t)k;
 }
 
 static void list(doc_t *d, const double *v, int n) {
@@ -47,8 +49,9 @@ static void list(doc_t *d, const double *v, int n) {
 
 /* The load model (load_model_t): what a controller should use. */
 static void format_model(doc_t *d, const loadid_pipeline_estimate_t *e) {
-    add(d, "model:   # physically consistent; the URDF <inertial> below is this\n"
-           "  identified: [");
+    add(d,
+        "model:   # physically consistent; the URDF <inertial> below is this\n"
+        "  identified: [");
     int first = 1;
     for (int bit = LOADID_IDENT_MASS; bit <= LOADID_IDENT_INERTIA; bit <<= 1)
         if (e->identified & bit) {
@@ -67,9 +70,10 @@ static void format_model(doc_t *d, const loadid_pipeline_estimate_t *e) {
 }
 
 static void format_doc(doc_t *d, const loadid_pipeline_estimate_t *e,
-                   const loadid_pipeline_compensation_t *c) {
-    add(d, "# A load estimated by loadidd (Kubus et al. 2008); inertia about the COM, axes\n"
-           "# of the sensor frame S. compensation: what wrench_t needs after a restart.\n");
+                       const loadid_pipeline_compensation_t *c) {
+    add(d,
+        "# A load estimated by loadidd (Kubus et al. 2008); inertia about the COM, axes\n"
+        "# of the sensor frame S. compensation: what wrench_t needs after a restart.\n");
     add(d, "format: loadid-estimate-1\nmethod: %s\nload_name: \"",
         loadid_method_name((loadid_method_t)e->method));
     for (const char *s = e->load_name; *s; ++s)
@@ -97,10 +101,11 @@ static void format_doc(doc_t *d, const loadid_pipeline_estimate_t *e,
     const double mass = e->has_model ? e->model_mass : e->mass;
     const double *com = e->has_model ? e->model_com : e->com;
     const double *in = e->has_model ? e->model_inertia_com : e->inertia_com;
-    add(d, "\nurdf_inertial: |\n  <inertial>\n"
-           "    <origin xyz=\"%.9g %.9g %.9g\" rpy=\"0 0 0\"/>\n    <mass value=\"%.9g\"/>\n"
-           "    <inertia ixx=\"%.9g\" ixy=\"%.9g\" ixz=\"%.9g\" iyy=\"%.9g\" iyz=\"%.9g\" "
-           "izz=\"%.9g\"/>\n  </inertial>\n",
+    add(d,
+        "\nurdf_inertial: |\n  <inertial>\n"
+        "    <origin xyz=\"%.9g %.9g %.9g\" rpy=\"0 0 0\"/>\n    <mass value=\"%.9g\"/>\n"
+        "    <inertia ixx=\"%.9g\" ixy=\"%.9g\" ixz=\"%.9g\" iyy=\"%.9g\" iyz=\"%.9g\" "
+        "izz=\"%.9g\"/>\n  </inertial>\n",
         com[0], com[1], com[2], mass, in[0], in[1], in[2], in[3], in[4], in[5]);
 }
 
@@ -115,8 +120,10 @@ static int write_one(const char *path, const char *text, size_t n) {
     int rc = 0;
     for (size_t done = 0; done < n && !rc;) {
         const ssize_t w = write(fd, text + done, n - done);
-        if (w < 0 && errno != EINTR) rc = -errno;
-        else if (w > 0) done += (size_t)w;
+        if (w < 0 && errno != EINTR)
+            rc = -errno;
+        else if (w > 0)
+            done += (size_t)w;
     }
     if (!rc && fsync(fd) != 0) rc = -errno;
     if (close(fd) != 0 && !rc) rc = -errno;
@@ -146,8 +153,10 @@ int loadid_saved_result_write(const char *dir, const loadid_pipeline_estimate_t 
     int rc = d.over ? -EOVERFLOW : 0;
     if (rc == 0) rc = write_one(name, text, d.n);
     if (rc == 0) rc = write_one(latest, text, d.n);
-    if (rc != 0) snprintf(err, errlen, "%s: cannot write: %s", name, strerror(-rc));
-    else if (path) snprintf(path, pathlen, "%s", name);
+    if (rc != 0)
+        snprintf(err, errlen, "%s: cannot write: %s", name, strerror(-rc));
+    else if (path)
+        snprintf(path, pathlen, "%s", name);
     return rc;
 }
 
@@ -176,16 +185,20 @@ static int read_doc(loadid_yaml_doc_t *doc, loadid_pipeline_estimate_t *e,
         return loadid_yaml_fail(loadid_yaml_get(root, "method"), "unknown method '%s'", method);
     e->method = m;
     uint64_t ut = 0;
-    if ((rc = need(loadid_yaml_get_string(root, "load_name", e->load_name, sizeof e->load_name), root, "load_name")) ||
+    if ((rc = need(loadid_yaml_get_string(root, "load_name", e->load_name, sizeof e->load_name),
+                   root, "load_name")) ||
         (rc = need(loadid_yaml_get_uint64(root, "utime", &ut), root, "utime")) ||
         (rc = need(loadid_yaml_get_uint64(root, "samples", &samples), root, "samples")) ||
         (rc = need(loadid_yaml_get_doubles(root, "phi", e->phi, 10), root, "phi")) ||
         (rc = need(loadid_yaml_get_doubles(root, "offset", e->offset, 6), root, "offset")) ||
         (rc = need(loadid_yaml_get_double(root, "mass", &e->mass), root, "mass")) ||
         (rc = need(loadid_yaml_get_doubles(root, "com", e->com, 3), root, "com")) ||
-        (rc = need(loadid_yaml_get_doubles(root, "inertia_com", e->inertia_com, 6), root, "inertia_com")) ||
-        (rc = need(loadid_yaml_get_double(root, "condition_number", &e->condition_number), root, "condition_number")) ||
-        (rc = need(loadid_yaml_get_bool(root, "physically_consistent", &e->physically_consistent), root, "physically_consistent")) ||
+        (rc = need(loadid_yaml_get_doubles(root, "inertia_com", e->inertia_com, 6), root,
+                   "inertia_com")) ||
+        (rc = need(loadid_yaml_get_double(root, "condition_number", &e->condition_number), root,
+                   "condition_number")) ||
+        (rc = need(loadid_yaml_get_bool(root, "physically_consistent", &e->physically_consistent),
+                   root, "physically_consistent")) ||
         (rc = need(loadid_yaml_get_mapping(root, "compensation", &comp), root, "compensation")) ||
         (rc = need(loadid_yaml_get_int(comp, "n_params", &c->n_params), comp, "n_params")))
         return rc;
@@ -195,7 +208,8 @@ static int read_doc(loadid_yaml_doc_t *doc, loadid_pipeline_estimate_t *e,
     e->state = LOADID_STATE_DONE;
     if (c->n_params != LOADID_NPHI && c->n_params != LOADID_NPHI_OFFSET)
         return loadid_yaml_fail(loadid_yaml_get(comp, "n_params"), "must be 10 or 16");
-    if ((rc = need(loadid_yaml_get_doubles(comp, "phi_total", c->phi_total, (size_t)c->n_params), comp, "phi_total")) ||
+    if ((rc = need(loadid_yaml_get_doubles(comp, "phi_total", c->phi_total, (size_t)c->n_params),
+                   comp, "phi_total")) ||
         (rc = need(loadid_yaml_get_bool(comp, "zeroed", &c->zeroed), comp, "zeroed")) ||
         (rc = need(loadid_yaml_get_doubles(comp, "y0", c->y0, 6), comp, "y0")) ||
         (rc = need(loadid_yaml_get_doubles(comp, "g_init", c->g_init, 3), comp, "g_init")))
@@ -208,8 +222,10 @@ static int read_doc(loadid_yaml_doc_t *doc, loadid_pipeline_estimate_t *e,
         if ((rc = need(loadid_yaml_get_doubles(model, "phi", e->model_phi, 10), model, "phi")) ||
             (rc = need(loadid_yaml_get_double(model, "mass", &e->model_mass), model, "mass")) ||
             (rc = need(loadid_yaml_get_doubles(model, "com", e->model_com, 3), model, "com")) ||
-            (rc = need(loadid_yaml_get_doubles(model, "inertia_com", e->model_inertia_com, 6), model, "inertia_com")) ||
-            (rc = need(loadid_yaml_get_bool(model, "projected", &e->projected), model, "projected")))
+            (rc = need(loadid_yaml_get_doubles(model, "inertia_com", e->model_inertia_com, 6),
+                       model, "inertia_com")) ||
+            (rc =
+                 need(loadid_yaml_get_bool(model, "projected", &e->projected), model, "projected")))
             return rc;
         loadid_yaml_node_t *ids = loadid_yaml_get(model, "identified");
         for (size_t i = 0; ids && i < loadid_yaml_count(ids); ++i) {

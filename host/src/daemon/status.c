@@ -52,17 +52,18 @@ void loadid_status_make(const loadid_pipeline_status_t *st, const loadid_input_c
 
 void loadid_status_summary(const loadid_pipeline_status_t *st, const loadid_input_counters_t *in,
                            int64_t commands_refused) {
-    loadidd_log("samples ok %lld, used %lld, frames bad %lld, incomplete %lld, saturated %lld, "
-                "faulty %lld, gaps %lld, joint msgs bad %lld, stale %lld, CAN errors %lld, "
-                "CAN drops %lld, error frames %lld, commands refused %lld",
-                (long long)st->samples_ok, (long long)st->samples_used, (long long)st->frames_bad,
-                (long long)st->samples_incomplete, (long long)st->samples_saturated,
-                (long long)st->samples_faulty, (long long)st->sequence_gaps,
-                (long long)st->joint_msgs_bad, (long long)st->samples_stale,
-                (long long)in->errors, (long long)in->drops, (long long)in->error_frames,
-                (long long)commands_refused);
+    loadidd_log(
+        "samples ok %lld, used %lld, frames bad %lld, incomplete %lld, saturated %lld, "
+        "faulty %lld, gaps %lld, joint msgs bad %lld, stale %lld, CAN errors %lld, "
+        "CAN drops %lld, error frames %lld, commands refused %lld",
+        (long long)st->samples_ok, (long long)st->samples_used, (long long)st->frames_bad,
+        (long long)st->samples_incomplete, (long long)st->samples_saturated,
+        (long long)st->samples_faulty, (long long)st->sequence_gaps, (long long)st->joint_msgs_bad,
+        (long long)st->samples_stale, (long long)in->errors, (long long)in->drops,
+        (long long)in->error_frames, (long long)commands_refused);
     if (in->late_measured) /* measured there (SocketCAN: not yet) */
-        loadidd_log("samples late %lld (handled more than %.0f ms after arrival), worst "
-                    "lateness %.0f us", (long long)in->samples_late, LOADID_INPUT_LATE_US / 1e3,
-                    in->late_max_us);
+        loadidd_log(
+            "samples late %lld (handled more than %.0f ms after arrival), worst "
+            "lateness %.0f us",
+            (long long)in->samples_late, LOADID_INPUT_LATE_US / 1e3, in->late_max_us);
 }

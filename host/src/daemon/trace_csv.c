@@ -20,14 +20,17 @@ int loadid_trace_csv_open(loadid_trace_csv_t *t, const char *path, char *err, si
     for (int i = 0; i < 10; ++i) fprintf(t->out, ",phi%d", i);
     for (int i = 0; i < 10; ++i) fprintf(t->out, ",phi_std%d", i);
     for (int i = 0; i < 6; ++i) fprintf(t->out, ",offset%d", i);
-    fputs(",fx,fy,fz,tx,ty,tz,spec_x,spec_y,spec_z,omega_x,omega_y,omega_z,alpha_x,alpha_y,alpha_z"
-          ",g_init_x,g_init_y,g_init_z,res_fx,res_fy,res_fz,res_tx,res_ty,res_tz",
-          t->out);
+    fputs(
+        ",fx,fy,fz,tx,ty,tz,spec_x,spec_y,spec_z,omega_x,omega_y,omega_z,alpha_x,alpha_y,alpha_z"
+        ",g_init_x,g_init_y,g_init_z,res_fx,res_fy,res_fz,res_tx,res_ty,res_tz",
+        t->out);
     fputc('\n', t->out);
     return 0;
 }
 
-void loadid_trace_csv_start(loadid_trace_csv_t *t, int64_t utime) { t->start_us = utime; }
+void loadid_trace_csv_start(loadid_trace_csv_t *t, int64_t utime) {
+    t->start_us = utime;
+}
 
 void loadid_trace_csv_row(loadid_trace_csv_t *t, const loadid_pipeline_estimate_t *e) {
     if (!t->out) return;

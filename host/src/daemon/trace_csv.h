@@ -38,8 +38,8 @@
 typedef struct {
     FILE *out;
     const char *path;
-    int64_t start_us;             /* START of the current run */
-    int errnum;                   /* the first failed write's errno */
+    int64_t start_us; /* START of the current run */
+    int errnum;       /* the first failed write's errno */
 } loadid_trace_csv_t;
 
 /* Creates path and writes the header. Returns 0, or -errno with

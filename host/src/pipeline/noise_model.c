@@ -5,7 +5,7 @@
 #include <string.h>
 
 #define D3_MIN 100
-#define D3_GAIN 20.0   /* var(x_k - 3 x_k-1 + 3 x_k-2 - x_k-3) / sigma^2 = 1 + 9 + 9 + 1 */
+#define D3_GAIN 20.0 /* var(x_k - 3 x_k-1 + 3 x_k-2 - x_k-3) / sigma^2 = 1 + 9 + 9 + 1 */
 #define MAD_TO_SIGMA 1.482602218505602 /* 1 / Phi^-1(3/4): sigma of a normal from its MAD */
 
 void loadid_noise_acc_reset(loadid_noise_acc_t *a) {
@@ -15,7 +15,9 @@ void loadid_noise_acc_reset(loadid_noise_acc_t *a) {
     a->d3_n = a->d3_head = 0;
 }
 
-void loadid_noise_acc_reset_still(loadid_noise_acc_t *a) { a->still_n = 0; }
+void loadid_noise_acc_reset_still(loadid_noise_acc_t *a) {
+    a->still_n = 0;
+}
 
 void loadid_noise_acc_still(loadid_noise_acc_t *a, const double x[LOADID_NOISE_CHANNELS]) {
     if (a->still_n == LOADID_NOISE_STILL_MAX) return; /* the first ones are enough */
@@ -62,7 +64,9 @@ static double select_kth(double *v, int n, int k) {
 }
 
 /* The median of v[0..n) (the upper one for even n). */
-static double median(double *v, int n) { return select_kth(v, n, n / 2); }
+static double median(double *v, int n) {
+    return select_kth(v, n, n / 2);
+}
 
 /* sigma of channel i of rows[0..n): 1.4826 median |x - center|, with
  * center the median (centered) or 0. */
@@ -78,7 +82,8 @@ int loadid_noise_acc_sigma(loadid_noise_acc_t *a, int min_still,
                            double sigma[LOADID_NOISE_CHANNELS]) {
     if (a->still_n >= min_still && a->still_n >= 2) {
         for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i)
-            sigma[i] = mad_sigma(a, (const double(*)[LOADID_NOISE_CHANNELS])a->still, a->still_n, i, 1);
+            sigma[i] =
+                mad_sigma(a, (const double(*)[LOADID_NOISE_CHANNELS])a->still, a->still_n, i, 1);
         return LOADID_NOISE_STILL;
     }
     if (a->d3_n >= D3_MIN) {
@@ -104,7 +109,8 @@ int loadid_noise_joint_levels(const loadid_kin_t *kin, const loadid_real_t *q, d
         /* alpha and a - g are linear in qdd (qd = 0), omega in qd. */
         rc = loadid_kin_eval(kin, q, zero, unit, &k);
         for (int i = 0; i < 3 && rc == 0; ++i) {
-            const double ds = (double)(k.spec[i] - base.spec[i]), da = (double)(k.alpha[i] - base.alpha[i]);
+            const double ds = (double)(k.spec[i] - base.spec[i]),
+                         da = (double)(k.alpha[i] - base.alpha[i]);
             s2 += ds * ds;
             a2 += da * da;
         }
@@ -121,7 +127,9 @@ int loadid_noise_joint_levels(const loadid_kin_t *kin, const loadid_real_t *q, d
 }
 
 /* RMS of three channels' levels. */
-static double rms3(const double *v) { return sqrt((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) / 3.0); }
+static double rms3(const double *v) {
+    return sqrt((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) / 3.0);
+}
 
 /* One level: configured, else measured (never below a thousandth of the
  * fallback, so a noise-free channel does not get an infinite weight), else
@@ -164,8 +172,8 @@ void loadid_noise_combine(const loadid_config_t *cfg, int jr3_spec, int jr3_alph
                                   rms3(channel + 9), channel_source, &out->source[3])
                            : pick(g & LOADID_NOISE_GIVEN_KF_ALPHA, cfg->kalman_alpha_sigma,
                                   joint_alpha, js, &out->source[3]);
-    out->omega = pick(g & LOADID_NOISE_GIVEN_OMEGA, cfg->noise_omega, joint_omega, js,
-                      &out->source[4]);
+    out->omega =
+        pick(g & LOADID_NOISE_GIVEN_OMEGA, cfg->noise_omega, joint_omega, js, &out->source[4]);
 }
 
 /* A level measured from the joint filter or smoother enters the weights
@@ -188,25 +196,30 @@ int loadid_noise_weights(const loadid_noise_levels_t *lv, double omega_typical,
     /* The noise's own weights first, for col_exact (the excitation gates
      * use those: exactness must not make weak data look excited). */
     loadid_est_config_t noise = *est;
-    int rc = loadid_est_weights_from_noise(&noise, (loadid_real_t)lv->force,
-                                           (loadid_real_t)lv->torque, (loadid_real_t)lv->spec,
-                                           (loadid_real_t)lv->alpha, (loadid_real_t)lv->omega,
-                                           (loadid_real_t)omega_typical);
+    int rc = loadid_est_weights_from_noise(
+        &noise, (loadid_real_t)lv->force, (loadid_real_t)lv->torque, (loadid_real_t)lv->spec,
+        (loadid_real_t)lv->alpha, (loadid_real_t)lv->omega, (loadid_real_t)omega_typical);
     if (rc == 0)
         rc = loadid_est_weights_from_noise(est, (loadid_real_t)lv->force, (loadid_real_t)lv->torque,
                                            (loadid_real_t)col[0], (loadid_real_t)col[1],
                                            (loadid_real_t)col[2], (loadid_real_t)omega_typical);
     if (rc != 0) return rc;
-    for (int j = 0; j <= est->n_params; ++j) est->col_exact[j] = est->col_weight[j] / noise.col_weight[j];
+    for (int j = 0; j <= est->n_params; ++j)
+        est->col_exact[j] = est->col_weight[j] / noise.col_weight[j];
     return 0;
 }
 
 const char *loadid_noise_source_name(int source) {
     switch (source) {
-        case LOADID_NOISE_STILL: return "zeroing";
-        case LOADID_NOISE_DIFFERENCES: return "differences";
-        case LOADID_NOISE_CONFIGURED: return "configured";
-        case LOADID_NOISE_FILTER: return "joint filter";
-        default: return "fallback";
+        case LOADID_NOISE_STILL:
+            return "zeroing";
+        case LOADID_NOISE_DIFFERENCES:
+            return "differences";
+        case LOADID_NOISE_CONFIGURED:
+            return "configured";
+        case LOADID_NOISE_FILTER:
+            return "joint filter";
+        default:
+            return "fallback";
     }
 }

@@ -22,9 +22,14 @@ static void note_bad(loadid_offline_report_t *r, const loadid_rec_event_t *ev, i
 static void feed(loadid_pipeline_t *p, const loadid_rec_event_t *ev, const char *joints,
                  const char *command, loadid_offline_report_t *r) {
     switch (ev->kind) {
-        case LOADID_REC_CAN: loadid_pipeline_can_frame(p, &ev->can); return;
-        case LOADID_REC_BAD_LINE: loadid_pipeline_bad_frame(p); return;
-        case LOADID_REC_LCM: break;
+        case LOADID_REC_CAN:
+            loadid_pipeline_can_frame(p, &ev->can);
+            return;
+        case LOADID_REC_BAD_LINE:
+            loadid_pipeline_bad_frame(p);
+            return;
+        case LOADID_REC_LCM:
+            break;
     }
     const size_t len = ev->datalen < 0 ? 0 : (size_t)ev->datalen;
     if (strcmp(ev->channel, joints) == 0) {

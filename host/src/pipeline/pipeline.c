@@ -16,7 +16,7 @@
 #define MIN_ZEROING_SAMPLES 10
 #define PENDING_MAX 512 /* samples waiting for joint data (and the fixed lag): 0.5 s at 1 kHz */
 #define NOISE_MAX_GAP_US 20000 /* third differences need consecutive samples */
-#define COMMANDS_MAX 16 /* commands waiting for the fixed lag (50 ms: a few at most) */
+#define COMMANDS_MAX 16        /* commands waiting for the fixed lag (50 ms: a few at most) */
 /* A pause between F/T samples longer than this is time without F/T data
  * (completeness): 20 samples of the JR3 at 1 kHz; for the Modbus sensor
  * at least 4 of its poll periods. */
@@ -26,10 +26,10 @@ struct loadid_pipeline {
     loadid_config_t cfg;
     loadid_pipeline_sink_t sink;
     int publish_every;
-    int std_always;               /* phi_std in every published estimate */
-    int n_params;                 /* 10 (zeroing) or 16 ([A E6]) */
+    int std_always; /* phi_std in every published estimate */
+    int n_params;   /* 10 (zeroing) or 16 ([A E6]) */
     int num_methods;
-    int has_riv;                  /* RIV configured: instruments needed */
+    int has_riv; /* RIV configured: instruments needed */
     loadid_est_t *est[LOADID_MAX_METHODS];
     loadid_signals_t *sig;
     loadid_jr3_decoder_t *jr3;
@@ -37,15 +37,15 @@ struct loadid_pipeline {
     loadid_model_config_t model_cfg;
     /* the measured noise model (noise_model.h) */
     loadid_noise_acc_t noise;
-    loadid_noise_levels_t levels;     /* the on-line estimators' */
-    loadid_kin_t *kin;                /* the joint levels at the pose */
-    double filter_sigma[3];           /* the joint filter's (or fixed-lag smoother's)
+    loadid_noise_levels_t levels; /* the on-line estimators' */
+    loadid_kin_t *kin;            /* the joint levels at the pose */
+    double filter_sigma[3];       /* the joint filter's (or fixed-lag smoother's)
                                          noise share of its q, qd, qdd errors */
     loadid_real_t last_q[LOADID_MAX_JOINTS];
     int have_q;
-    int has_accel;                    /* the configured sensor has an accelerometer (JR3) */
+    int has_accel; /* the configured sensor has an accelerometer (JR3) */
     /* REFINED (refined.h) */
-    int refined_m;                    /* its method index, -1 when not configured */
+    int refined_m; /* its method index, -1 when not configured */
     loadid_refined_t *refined;
     loadid_refined_report_t refined_rep;
     int refined_ran;
@@ -60,12 +60,12 @@ struct loadid_pipeline {
     int complete;
     char incomplete_reason[256];
     int64_t stale_at_start;
-    int64_t ft_gap_us;            /* FT_GAP_US, or the Modbus sensor's */
-    int64_t cover_prev_us;        /* the window's last F/T sample so far (START at first) */
-    int64_t missing_us;           /* time of the window without F/T samples */
-    int64_t win_samples;          /* the window's F/T samples, usable or refused */
+    int64_t ft_gap_us;                 /* FT_GAP_US, or the Modbus sensor's */
+    int64_t cover_prev_us;             /* the window's last F/T sample so far (START at first) */
+    int64_t missing_us;                /* time of the window without F/T samples */
+    int64_t win_samples;               /* the window's F/T samples, usable or refused */
     int64_t win_saturated, win_faulty; /* of which refused, saturated or faulty */
-    int64_t incomplete_at_start;  /* the decoder's samples_incomplete at START */
+    int64_t incomplete_at_start;       /* the decoder's samples_incomplete at START */
 
     int state;
     char reason[192];
@@ -75,25 +75,25 @@ struct loadid_pipeline {
     int64_t zero_end_us;
     int64_t zero_n, zero_g_n;
     double zero_sum[6], zero_g_sum[3];
-    int zeroed;                   /* y0 and g_init are valid */
+    int zeroed; /* y0 and g_init are valid */
     loadid_real_t y0[6], g_init[3];
     /* estimation */
     int64_t est_end_us, last_sample_us, since_publish;
-    int64_t start_us;             /* START's utime */
-    int rescaled;                 /* the rows' check at estimation.rescale_s is done */
-    double row_rescale[3];        /* the factors it applied (force, torque, columns), 1 = none */
+    int64_t start_us;      /* START's utime */
+    int rescaled;          /* the rows' check at estimation.rescale_s is done */
+    double row_rescale[3]; /* the factors it applied (force, torque, columns), 1 = none */
     loadid_pipeline_estimate_t latest[LOADID_MAX_METHODS];
-    int primary;                  /* method used for wrench_t, -1 none */
-    loadid_real_t phi_total[16];  /* primary's estimate with the distal part */
+    int primary;                 /* method used for wrench_t, -1 none */
+    loadid_real_t phi_total[16]; /* primary's estimate with the distal part */
     /* loadid_pipeline_trace_rows: the window's newest sample */
     int trace_rows, have_row;
-    loadid_real_t row_y[6];           /* as the estimators took it (eq. 7) */
+    loadid_real_t row_y[6]; /* as the estimators took it (eq. 7) */
     loadid_regressor_input_t row_motion;
 
     int64_t frames_bad_extra, samples_used, estimator_errors;
     /* loadid_pipeline_sample (samples decoded outside, the Modbus sensor's) */
     int64_t ft_ok, ft_saturated, ft_faulty, ft_rejected;
-    int ft_source_noted;          /* the refusal below was logged */
+    int ft_source_noted; /* the refusal below was logged */
     /* Samples wait here until a joint state at or after their time has
      * arrived, so the joints are interpolated at the sample's time, not
      * extrapolated, and the result does not depend on which of the two
@@ -265,12 +265,14 @@ static void explain(loadid_pipeline_t *p, int m, int rc, const loadid_est_info_t
         snprintf(out, len, "not excited: %lld samples, too few for %d parameters", (long long)k,
                  p->n_params);
     else if (!(info->condition_number <= c->max_condition))
-        snprintf(out, len, "not excited: the motion does not determine %s (condition number %.3g "
-                           "over %.3g, %lld samples)", group, (double)info->condition_number,
-                 (double)c->max_condition, (long long)k);
+        snprintf(out, len,
+                 "not excited: the motion does not determine %s (condition number %.3g "
+                 "over %.3g, %lld samples)",
+                 group, (double)info->condition_number, (double)c->max_condition, (long long)k);
     else
-        snprintf(out, len, "not excited: no direction of phi stands out of the noise; weakest "
-                           "is %s (noise ratio %.3g, condition number %.3g, %lld samples)",
+        snprintf(out, len,
+                 "not excited: no direction of phi stands out of the noise; weakest "
+                 "is %s (noise ratio %.3g, condition number %.3g, %lld samples)",
                  group, (double)info->noise_ratio, (double)info->condition_number, (long long)k);
 }
 
@@ -392,13 +394,17 @@ static void publish_all(loadid_pipeline_t *p, int final) {
         /* REFINED has an estimate only once the window has ended (and,
          * on the worker, once its job has been collected). */
         if (m == p->refined_m && (!final || refined_busy(p))) continue;
-        if (m == p->refined_m) take_refined(p);
-        else estimate_of(p, m, &p->latest[m], final);
+        if (m == p->refined_m)
+            take_refined(p);
+        else
+            estimate_of(p, m, &p->latest[m], final);
         if (p->sink.estimate) p->sink.estimate(p->sink.ctx, &p->latest[m]);
     }
 }
 
-static int popcount3(int bits) { return (bits & 1) + ((bits >> 1) & 1) + ((bits >> 2) & 1); }
+static int popcount3(int bits) {
+    return (bits & 1) + ((bits >> 1) & 1) + ((bits >> 2) & 1);
+}
 
 /* The primary method: the most identified groups; ties go to REFINED, then
  * to the configuration's order. -1 when no method has an estimate. */
@@ -440,7 +446,8 @@ static void check_complete(loadid_pipeline_t *p, int64_t utime, int by_stop) {
     } else if (!by_stop && utime < p->est_end_us) {
         n = snprintf(why, sizeof why,
                      "the recording ends %.3f s after START, %.3f s before the estimation window "
-                     "does", window_s, (double)(p->est_end_us - utime) / 1e6);
+                     "does",
+                     window_s, (double)(p->est_end_us - utime) / 1e6);
     } else if ((double)missing > p->cfg.max_missing_share * (double)(end - p->start_us)) {
         n = snprintf(why, sizeof why, "no F/T sample for %.3f s of the %.3f s window",
                      (double)missing / 1e6, window_s);
@@ -474,7 +481,9 @@ static void check_complete(loadid_pipeline_t *p, int64_t utime, int by_stop) {
     snprintf(p->incomplete_reason, sizeof p->incomplete_reason, "%s", why);
 }
 
-static int refined_busy(loadid_pipeline_t *p) { return p->worker && loadid_worker_busy(p->worker); }
+static int refined_busy(loadid_pipeline_t *p) {
+    return p->worker && loadid_worker_busy(p->worker);
+}
 
 /* REFINED's batch over the window (on the worker, or in line offline),
  * and its estimate: the batch TLS's SVD, uncertainty and load model cost
@@ -493,12 +502,13 @@ static void refined_noted(loadid_pipeline_t *p) {
         return;
     }
     const loadid_noise_levels_t *l = &p->refined_rep.levels;
-    note(p, "REFINED: %lld samples on the smoothed joints (jerk PSD %.3g; the accelerometer "
-            "differs from them by %.3g m/s^2, %.3g rad/s^2 RMS); rows f %.3g N, tau %.3g N m (of "
-            "which unexplained %.3g, %.3g)",
-         (long long)p->refined_rep.samples, p->refined_rep.jerk_psd, p->refined_rep.sensor_spec_error,
-         p->refined_rep.sensor_alpha_error, l->force, l->torque, p->refined_rep.unexplained[0],
-         p->refined_rep.unexplained[1]);
+    note(p,
+         "REFINED: %lld samples on the smoothed joints (jerk PSD %.3g; the accelerometer "
+         "differs from them by %.3g m/s^2, %.3g rad/s^2 RMS); rows f %.3g N, tau %.3g N m (of "
+         "which unexplained %.3g, %.3g)",
+         (long long)p->refined_rep.samples, p->refined_rep.jerk_psd,
+         p->refined_rep.sensor_spec_error, p->refined_rep.sensor_alpha_error, l->force, l->torque,
+         p->refined_rep.unexplained[0], p->refined_rep.unexplained[1]);
 }
 
 /* REFINED at DONE: in line, or handed to the worker (its estimate is then
@@ -549,7 +559,8 @@ static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
         return;
     }
     for (int i = 0; i < 6; ++i) p->y0[i] = (loadid_real_t)(p->zero_sum[i] / (double)p->zero_n);
-    for (int i = 0; i < 3; ++i) p->g_init[i] = (loadid_real_t)(p->zero_g_sum[i] / (double)p->zero_g_n);
+    for (int i = 0; i < 3; ++i)
+        p->g_init[i] = (loadid_real_t)(p->zero_g_sum[i] / (double)p->zero_g_n);
     p->zeroed = 1;
     set_state(p, utime, LOADID_STATE_IDLE, "");
 }
@@ -557,7 +568,8 @@ static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
 /* Windows that end by time, before anything at utime is handled. */
 static void advance(loadid_pipeline_t *p, int64_t utime) {
     if (p->state == LOADID_STATE_ZEROING && utime >= p->zero_end_us) finish_zeroing(p, utime);
-    if (p->state == LOADID_STATE_ESTIMATING && utime >= p->est_end_us) finish_estimation(p, utime, 1);
+    if (p->state == LOADID_STATE_ESTIMATING && utime >= p->est_end_us)
+        finish_estimation(p, utime, 1);
 }
 
 /* The clock ends a window only TICK_GRACE_US (plus the smoother's lag)
@@ -639,7 +651,9 @@ int loadid_pipeline_refined_collect(loadid_pipeline_t *p) {
     return 1;
 }
 
-int loadid_pipeline_refined_pending(loadid_pipeline_t *p) { return refined_busy(p); }
+int loadid_pipeline_refined_pending(loadid_pipeline_t *p) {
+    return refined_busy(p);
+}
 
 static void reset_run(loadid_pipeline_t *p) {
     p->rescaled = 0;
@@ -692,14 +706,16 @@ static void apply_measured_noise(loadid_pipeline_t *p) {
             const double measured = sqrt((c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / 3.0);
             if (!applies[k] || !(p->cfg.noise_given & bits[k]) || !(measured > 0)) continue;
             if (used[k] > 2 * measured || used[k] < 0.5 * measured)
-                note(p, "warning: %s is %.3g but the data measure %.3g (%s); the configured level "
-                        "is used",
+                note(p,
+                     "warning: %s is %.3g but the data measure %.3g (%s); the configured level "
+                     "is used",
                      keys[k], used[k], measured, loadid_noise_source_name(src));
         }
     }
     const loadid_noise_levels_t *l = &p->levels;
-    note(p, "noise (%s): f %.3g N (%s), tau %.3g N m (%s), a - g %.3g m/s^2 (%s), alpha %.3g "
-            "rad/s^2 (%s), omega %.3g rad/s (%s)",
+    note(p,
+         "noise (%s): f %.3g N (%s), tau %.3g N m (%s), a - g %.3g m/s^2 (%s), alpha %.3g "
+         "rad/s^2 (%s), omega %.3g rad/s (%s)",
          loadid_noise_source_name(src), l->force, loadid_noise_source_name(l->source[0]), l->torque,
          loadid_noise_source_name(l->source[1]), l->spec, loadid_noise_source_name(l->source[2]),
          l->alpha, loadid_noise_source_name(l->source[3]), l->omega,
@@ -713,7 +729,8 @@ void loadid_pipeline_command(loadid_pipeline_t *p, int64_t utime, int action,
     if (p->cfg.kalman_lag_s > 0) {
         /* Acts once the joint data cover its utime (flush_pending). A full
          * queue (commands faster than the lag) serves the oldest now. */
-        if (p->commands_count == COMMANDS_MAX) flush_pending(p, p->commands[p->commands_head].utime + 1, 0);
+        if (p->commands_count == COMMANDS_MAX)
+            flush_pending(p, p->commands[p->commands_head].utime + 1, 0);
         const int slot = (p->commands_head + p->commands_count) % COMMANDS_MAX;
         p->commands[slot].utime = utime;
         p->commands[slot].action = action;
@@ -775,8 +792,10 @@ static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const c
             set_state(p, utime, LOADID_STATE_ESTIMATING, "");
             return;
         case LOADID_CMD_STOP:
-            if (p->state == LOADID_STATE_ESTIMATING) finish_estimation(p, utime, 1);
-            else note(p, "STOP ignored: not estimating");
+            if (p->state == LOADID_STATE_ESTIMATING)
+                finish_estimation(p, utime, 1);
+            else
+                note(p, "STOP ignored: not estimating");
             return;
         case LOADID_CMD_RESET:
             reset_run(p);
@@ -792,7 +811,9 @@ static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const c
             }
             set_state(p, utime, LOADID_STATE_IDLE, "");
             return;
-        default: note(p, "unknown command action %d ignored", action); return;
+        default:
+            note(p, "unknown command action %d ignored", action);
+            return;
     }
 }
 
@@ -841,22 +862,28 @@ static void check_row_scales(loadid_pipeline_t *p, int64_t t_us) {
     const double f = sc[0] > 1 ? (double)sc[0] : 1, t = sc[1] > 1 ? (double)sc[1] : 1;
     const double c = f < t ? f : t;
     if (!(tls > 1.2) || !(f > 1.2 || t > 1.2)) {
-        note(p, "rows: the misfit after %.3g s is what the noise levels say (TLS %.2f of them; "
-                "least squares: force %.2f, torque %.2f)",
+        note(p,
+             "rows: the misfit after %.3g s is what the noise levels say (TLS %.2f of them; "
+             "least squares: force %.2f, torque %.2f)",
              p->cfg.rescale_s, tls, (double)sc[0], (double)sc[1]);
         return;
     }
     for (int m = 0; m < p->num_methods; ++m) {
-        if (p->cfg.methods[m] != LOADID_METHOD_RTLS && p->cfg.methods[m] != LOADID_METHOD_TLS_BATCH) continue;
-        const int rc = loadid_est_rescale(p->est[m], (loadid_real_t)f, (loadid_real_t)t, (loadid_real_t)c);
-        if (rc != 0) note(p, "%s: rows not weighed again: %s", loadid_method_name(p->cfg.methods[m]),
-                          loadid_strerror(rc));
+        if (p->cfg.methods[m] != LOADID_METHOD_RTLS && p->cfg.methods[m] != LOADID_METHOD_TLS_BATCH)
+            continue;
+        const int rc =
+            loadid_est_rescale(p->est[m], (loadid_real_t)f, (loadid_real_t)t, (loadid_real_t)c);
+        if (rc != 0)
+            note(p, "%s: rows not weighed again: %s", loadid_method_name(p->cfg.methods[m]),
+                 loadid_strerror(rc));
     }
     p->row_rescale[0] = f, p->row_rescale[1] = t, p->row_rescale[2] = c;
-    note(p, "rows: the misfit after %.3g s is %.2f times what the noise levels explain (TLS), "
-            "%.2f in the force and %.2f in the torque rows (least squares); RTLS and TLS_BATCH "
-            "weigh those rows by it, and the columns by %.2f, from here on and back to the first "
-            "sample", p->cfg.rescale_s, tls, (double)sc[0], (double)sc[1], c);
+    note(p,
+         "rows: the misfit after %.3g s is %.2f times what the noise levels explain (TLS), "
+         "%.2f in the force and %.2f in the torque rows (least squares); RTLS and TLS_BATCH "
+         "weigh those rows by it, and the columns by %.2f, from here on and back to the first "
+         "sample",
+         p->cfg.rescale_s, tls, (double)sc[0], (double)sc[1], c);
 }
 
 /* The regressor the estimators use for one motion: eq. (6) with the zeroing
@@ -917,7 +944,8 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
         loadid_real_t pred[6];
         loadid_regressor_apply(A, p->n_params, p->phi_total, pred);
         double f[3], t[3];
-        for (int i = 0; i < 3; ++i) f[i] = (double)(y[i] - pred[i]), t[i] = (double)(y[3 + i] - pred[3 + i]);
+        for (int i = 0; i < 3; ++i)
+            f[i] = (double)(y[i] - pred[i]), t[i] = (double)(y[3 + i] - pred[3 + i]);
         if (p->sink.wrench) p->sink.wrench(p->sink.ctx, s->t_us, f, t);
         return;
     }
@@ -1067,7 +1095,9 @@ void loadid_pipeline_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *
     enqueue(p, &c);
 }
 
-void loadid_pipeline_bad_frame(loadid_pipeline_t *p) { p->frames_bad_extra++; }
+void loadid_pipeline_bad_frame(loadid_pipeline_t *p) {
+    p->frames_bad_extra++;
+}
 
 void loadid_pipeline_status(const loadid_pipeline_t *p, loadid_pipeline_status_t *st) {
     memset(st, 0, sizeof *st);
@@ -1107,9 +1137,13 @@ int loadid_pipeline_estimates(const loadid_pipeline_t *p, loadid_pipeline_estima
     return n;
 }
 
-int loadid_pipeline_started(const loadid_pipeline_t *p) { return p->started; }
+int loadid_pipeline_started(const loadid_pipeline_t *p) {
+    return p->started;
+}
 
-const loadid_config_t *loadid_pipeline_config(const loadid_pipeline_t *p) { return &p->cfg; }
+const loadid_config_t *loadid_pipeline_config(const loadid_pipeline_t *p) {
+    return &p->cfg;
+}
 
 int loadid_pipeline_final(const loadid_pipeline_t *p, loadid_pipeline_estimate_t *est,
                           loadid_pipeline_compensation_t *comp) {

@@ -69,8 +69,8 @@ int loadid_refined_create(const loadid_config_t *cfg, const loadid_chain_t *chai
     r->qdds = malloc(nj * sizeof *r->qdds);
     for (int i = 0; i < 3; ++i) r->best_q[i] = malloc(nj * sizeof *r->best_q[i]);
     if (rc == 0 && !(r->jt && r->jq && r->s && r->kin_store && r->kin_ok && r->best_kin &&
-                     r->best_ok && r->best_q[0] && r->best_q[1] && r->best_q[2] && r->t_lin && r->q_lin && r->work && r->qs && r->qds &&
-                     r->qdds))
+                     r->best_ok && r->best_q[0] && r->best_q[1] && r->best_q[2] && r->t_lin &&
+                     r->q_lin && r->work && r->qs && r->qds && r->qdds))
         rc = -ENOMEM;
     if (rc) {
         loadid_refined_destroy(r);
@@ -144,8 +144,8 @@ static int smooth_joints(loadid_refined_t *r, const loadid_jf_config_t *jf, int6
             r->q_lin[k] = r->jq[(size_t)slot * (size_t)r->n_joints + (size_t)j];
         }
         const size_t off = (size_t)j * (size_t)r->jcap;
-        const int rc = loadid_jf_smooth(jf, (size_t)count, r->t_lin, r->q_lin, r->work,
-                                        r->qs + off, r->qds + off, r->qdds + off);
+        const int rc = loadid_jf_smooth(jf, (size_t)count, r->t_lin, r->q_lin, r->work, r->qs + off,
+                                        r->qds + off, r->qdds + off);
         if (rc) return rc;
     }
     return count;
@@ -168,7 +168,9 @@ static int joints_at(const loadid_refined_t *r, int count, int *k, int64_t t, lo
     return 0;
 }
 
-static double sq(double v) { return v * v; }
+static double sq(double v) {
+    return v * v;
+}
 
 /* The estimator's levels: the wrench rows as given, the smoothed joints'
  * columns exact (loadid_noise_weights). */
@@ -326,8 +328,8 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
         jf.jerk_psd = (loadid_real_t)((double)r->jf.jerk_psd * pow(10.0, -trial));
         const int64_t n = kinematics(r, &jf);
         if (n < 2) continue;
-        const double rss = fit_residual(r, n_params, g_init, rep->levels.force, rep->levels.torque,
-                                        NULL);
+        const double rss =
+            fit_residual(r, n_params, g_init, rep->levels.force, rep->levels.torque, NULL);
         if (!(rss < best)) continue;
         best = rss, best_psd = (double)jf.jerk_psd, used = n, best_count = r->count;
         swap_best(r); /* keep this trial's kinematics and smoothed joints */
@@ -367,8 +369,8 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     double js = 0, ja = 0, jw = 0;
     if (joints_at(r, r->count, &k, r->s[r->scount / 2].t, q, qd, qdd) == 0)
         loadid_noise_joint_levels(r->kin, q, smooth_sigma[1], smooth_sigma[2], &js, &ja, &jw);
-    loadid_noise_combine(&c, 0, 0, channel, channel_source, fmax(js, 1e-9),
-                         fmax(ja, 1e-9), fmax(jw, 1e-12), &rep->levels);
+    loadid_noise_combine(&c, 0, 0, channel, channel_source, fmax(js, 1e-9), fmax(ja, 1e-9),
+                         fmax(jw, 1e-12), &rep->levels);
 
     /* The rows' noise raised by what of a least-squares fit's residual the
      * wrench's noise does not explain, then the TLS fit. */

@@ -89,7 +89,9 @@ void loadid_worker_destroy(loadid_worker_t *w) {
     free(w);
 }
 
-int loadid_worker_fd(const loadid_worker_t *w) { return w->efd; }
+int loadid_worker_fd(const loadid_worker_t *w) {
+    return w->efd;
+}
 
 int loadid_worker_submit(loadid_worker_t *w) {
     pthread_mutex_lock(&w->mu);

@@ -76,14 +76,21 @@ void dataset_free(dataset_t *d) {
     d->A = d->C = d->y = NULL;
 }
 
-const loadid_real_t *dataset_A(const dataset_t *d, int k) { return d->A + (size_t)k * 6 * d->n_params; }
-const loadid_real_t *dataset_C(const dataset_t *d, int k) { return d->C + (size_t)k * 6 * d->n_params; }
-const loadid_real_t *dataset_y(const dataset_t *d, int k) { return d->y + (size_t)k * 6; }
+const loadid_real_t *dataset_A(const dataset_t *d, int k) {
+    return d->A + (size_t)k * 6 * d->n_params;
+}
+const loadid_real_t *dataset_C(const dataset_t *d, int k) {
+    return d->C + (size_t)k * 6 * d->n_params;
+}
+const loadid_real_t *dataset_y(const dataset_t *d, int k) {
+    return d->y + (size_t)k * 6;
+}
 
 void dataset_config(const dataset_spec_t *spec, loadid_method_t method, loadid_est_config_t *cfg) {
     loadid_est_config_default(method, spec->n_params, cfg);
     const loadid_synth_noise_t *n = &spec->noise;
-    if (n->sigma_f > 0 && n->sigma_tau > 0 && n->sigma_spec > 0 && n->sigma_alpha > 0 && n->sigma_omega > 0)
+    if (n->sigma_f > 0 && n->sigma_tau > 0 && n->sigma_spec > 0 && n->sigma_alpha > 0 &&
+        n->sigma_omega > 0)
         loadid_est_weights_from_noise(cfg, (loadid_real_t)n->sigma_f, (loadid_real_t)n->sigma_tau,
                                       (loadid_real_t)n->sigma_spec, (loadid_real_t)n->sigma_alpha,
                                       (loadid_real_t)n->sigma_omega, 2);

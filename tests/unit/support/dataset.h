@@ -16,17 +16,17 @@
 #include "loadid_synth.h"
 
 typedef struct {
-    uint64_t seed;               /* trajectory and noise */
-    int n_samples;               /* at 1 kHz */
-    int n_params;                /* 10 or 16 */
-    const double *phi;           /* load, eq. (5); NULL = the paper's o1 */
-    loadid_synth_noise_t noise;  /* all zero = exact data */
-    int still;                   /* 1: every sample in the still start pose (degenerate) */
+    uint64_t seed;              /* trajectory and noise */
+    int n_samples;              /* at 1 kHz */
+    int n_params;               /* 10 or 16 */
+    const double *phi;          /* load, eq. (5); NULL = the paper's o1 */
+    loadid_synth_noise_t noise; /* all zero = exact data */
+    int still;                  /* 1: every sample in the still start pose (degenerate) */
 } dataset_spec_t;
 
 typedef struct {
     int n_samples, n_params;
-    loadid_real_t *A, *C, *y;    /* 6 x n_params, 6 x n_params, 6 per sample */
+    loadid_real_t *A, *C, *y; /* 6 x n_params, 6 x n_params, 6 per sample */
     double truth[LOADID_MAX_PARAMS];
 } dataset_t;
 

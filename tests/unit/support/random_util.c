@@ -8,7 +8,9 @@
 
 #include "random_util.h"
 
-double uniform_in(loadid_rng_t *rng, double lo, double hi) { return lo + (hi - lo) * loadid_rng_uniform(rng); }
+double uniform_in(loadid_rng_t *rng, double lo, double hi) {
+    return lo + (hi - lo) * loadid_rng_uniform(rng);
+}
 
 void uniform_vec3(loadid_rng_t *rng, double lim, double v[3]) {
     for (int i = 0; i < 3; ++i) v[i] = uniform_in(rng, -lim, lim);

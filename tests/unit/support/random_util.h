@@ -8,14 +8,14 @@
 #include "loadid_synth.h"
 
 /* Fails with the numbers when |actual - expected| > tol (NaN fails too). */
-#define ASSERT_CLOSE(actual, expected, tol, what)                                              \
-    do {                                                                                       \
-        const double got_ = (actual), want_ = (expected), tol_ = (tol);                        \
-        if (!(fabs(got_ - want_) <= tol_)) {                                                   \
-            print_error("%s: got %.17g, expected %.17g (|diff| %.3g > tol %.3g)\n", (what),    \
-                        got_, want_, fabs(got_ - want_), tol_);                                \
-            fail();                                                                            \
-        }                                                                                      \
+#define ASSERT_CLOSE(actual, expected, tol, what)                                                 \
+    do {                                                                                          \
+        const double got_ = (actual), want_ = (expected), tol_ = (tol);                           \
+        if (!(fabs(got_ - want_) <= tol_)) {                                                      \
+            print_error("%s: got %.17g, expected %.17g (|diff| %.3g > tol %.3g)\n", (what), got_, \
+                        want_, fabs(got_ - want_), tol_);                                         \
+            fail();                                                                               \
+        }                                                                                         \
     } while (0)
 
 /* Uniform in [lo, hi). */

@@ -27,14 +27,13 @@ extern "C" {
 /* Fills chain from the URDF at path. On failure writes a one-line reason
  * into err (errlen bytes, may be 0) and returns -ENOENT (cannot read),
  * LOADID_E_MODEL (not a usable chain) or -EINVAL (NULL argument). */
-int loadid_urdf_load_file(const char *path, const char *base_link,
-                          const char *sensor_link, loadid_chain_t *chain,
-                          char *err, size_t errlen);
+int loadid_urdf_load_file(const char *path, const char *base_link, const char *sensor_link,
+                          loadid_chain_t *chain, char *err, size_t errlen);
 
 /* The same from URDF text in memory (name is used in messages). */
-int loadid_urdf_load_string(const char *xml, const char *name,
-                            const char *base_link, const char *sensor_link,
-                            loadid_chain_t *chain, char *err, size_t errlen);
+int loadid_urdf_load_string(const char *xml, const char *name, const char *base_link,
+                            const char *sensor_link, loadid_chain_t *chain, char *err,
+                            size_t errlen);
 
 #ifdef __cplusplus
 }

@@ -65,10 +65,11 @@ void loadid_input_late(loadid_input_t *in, double late_us) {
     in->samples_late++;
     const double now = loadid_mono_us();
     if (now - in->late_warned_us >= 1e6) {
-        loadidd_log("%lld samples handled more than %.0f ms after arrival so far "
-                    "(%lld new, worst %.0f us)", (long long)in->samples_late,
-                    LOADID_INPUT_LATE_US / 1e3, (long long)(in->samples_late - in->late_logged),
-                    in->late_max_us);
+        loadidd_log(
+            "%lld samples handled more than %.0f ms after arrival so far "
+            "(%lld new, worst %.0f us)",
+            (long long)in->samples_late, LOADID_INPUT_LATE_US / 1e3,
+            (long long)(in->samples_late - in->late_logged), in->late_max_us);
         in->late_logged = in->samples_late;
         in->late_warned_us = now;
     }

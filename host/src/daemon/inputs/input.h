@@ -31,29 +31,29 @@
 
 /* What an input counts, in one form for status_t and the log. */
 typedef struct {
-    int64_t frames_bad;          /* status_t.frames_bad, besides the pipeline's: bad
+    int64_t frames_bad;         /* status_t.frames_bad, besides the pipeline's: bad
                                     frames the pipeline never saw (CAN error frames;
                                     the Modbus sensor's bad answers, exceptions,
                                     malformed blocks) */
-    int64_t samples_incomplete;  /* status_t.samples_incomplete, besides the
+    int64_t samples_incomplete; /* status_t.samples_incomplete, besides the
                                     pipeline's: reads without an answer */
-    int64_t errors;              /* the input failed and is reopened ("CAN errors") */
-    int64_t drops;               /* frames the kernel dropped ("CAN drops") */
-    int64_t error_frames;        /* CAN error frames ("error frames"; in frames_bad) */
-    int late_measured;           /* the backend knows its samples' arrival (not
+    int64_t errors;             /* the input failed and is reopened ("CAN errors") */
+    int64_t drops;              /* frames the kernel dropped ("CAN drops") */
+    int64_t error_frames;       /* CAN error frames ("error frames"; in frames_bad) */
+    int late_measured;          /* the backend knows its samples' arrival (not
                                     SocketCAN yet) */
-    int64_t samples_late;        /* handled more than LOADID_INPUT_LATE_US after arrival */
-    double late_max_us;          /* the worst lateness of any sample */
+    int64_t samples_late;       /* handled more than LOADID_INPUT_LATE_US after arrival */
+    double late_max_us;         /* the worst lateness of any sample */
 } loadid_input_counters_t;
 
 #define LOADID_INPUT_LATE_US 1000.0 /* a sample's deadline after its arrival */
 
 /* What a backend is told besides the configuration. */
 typedef struct {
-    const char *path;            /* jr3_candump: the log; replay: the folder */
-    int64_t epoch_us;            /* jr3_candump: the wall time of the first frame;
+    const char *path;  /* jr3_candump: the log; replay: the folder */
+    int64_t epoch_us;  /* jr3_candump: the wall time of the first frame;
                                     replay: of the first event; 0: now */
-    int with_commands;           /* replay: its command_t events act too */
+    int with_commands; /* replay: its command_t events act too */
 } loadid_input_options_t;
 
 typedef struct loadid_input loadid_input_t;
@@ -63,8 +63,7 @@ typedef struct {
     /* Opens the device or file, allocating what it needs; may hand what is
      * already due to the pipeline. Returns 0, or a negative code with a
      * one-line reason in err. */
-    int (*open)(loadid_input_t *in, const loadid_input_options_t *opt, char *err,
-                size_t errlen);
+    int (*open)(loadid_input_t *in, const loadid_input_options_t *opt, char *err, size_t errlen);
     /* The descriptor the loop waits on; -1 while there is none (a CAN
      * interface gone, to be reopened by second). */
     int (*fd)(const loadid_input_t *in);
@@ -92,7 +91,7 @@ struct loadid_input {
     const loadid_input_backend_t *backend;
     const loadid_config_t *cfg;
     loadid_pipeline_t *pipe;
-    void *state;                 /* the backend's own */
+    void *state; /* the backend's own */
     /* lateness (input.c) */
     int late_measured;
     int64_t samples_late, late_logged;

@@ -22,9 +22,9 @@ typedef struct {
     int timer_fd;
     FILE *file;
     loadid_candump_reader_t *reader;
-    int have_next;                /* the next frame is read ahead */
+    int have_next; /* the next frame is read ahead */
     loadid_can_frame_t next;
-    int64_t file_t0, wall_t0;     /* the first frame's time, its wall time */
+    int64_t file_t0, wall_t0; /* the first frame's time, its wall time */
     double mono_t0;
 } candump_t;
 
@@ -50,12 +50,12 @@ static void feed_due(loadid_input_t *in) {
     }
     if (!c->have_next) return; /* replayed: the input is quiet */
     const double due = c->mono_t0 + (double)(c->next.t_us - c->file_t0);
-    struct itimerspec its = {{0, 0}, {(time_t)(due / 1e6), (long)(due - (double)(time_t)(due / 1e6) * 1e6) * 1000}};
+    struct itimerspec its = {
+        {0, 0}, {(time_t)(due / 1e6), (long)(due - (double)(time_t)(due / 1e6) * 1e6) * 1000}};
     timerfd_settime(c->timer_fd, TFD_TIMER_ABSTIME, &its, NULL);
 }
 
-static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *err,
-                 size_t errlen) {
+static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *err, size_t errlen) {
     candump_t *c = calloc(1, sizeof *c);
     if (!c) {
         snprintf(err, errlen, "out of memory");
@@ -86,7 +86,9 @@ static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *er
     return 0;
 }
 
-static int fd_(const loadid_input_t *in) { return ((const candump_t *)in->state)->timer_fd; }
+static int fd_(const loadid_input_t *in) {
+    return ((const candump_t *)in->state)->timer_fd;
+}
 
 static void read_(loadid_input_t *in) {
     candump_t *c = in->state;
@@ -109,6 +111,9 @@ static void close_(loadid_input_t *in) {
     in->state = NULL;
 }
 
-const loadid_input_backend_t loadid_input_jr3_candump = {
-    .name = "jr3-candump", .open = open_, .fd = fd_, .read = read_, .counters = counters,
-    .close = close_};
+const loadid_input_backend_t loadid_input_jr3_candump = {.name = "jr3-candump",
+                                                         .open = open_,
+                                                         .fd = fd_,
+                                                         .read = read_,
+                                                         .counters = counters,
+                                                         .close = close_};

@@ -20,22 +20,21 @@
 #include "loadid/socketcan.h"
 
 typedef struct {
-    int fd;                       /* the socket, or -1 while the interface is gone */
+    int fd; /* the socket, or -1 while the interface is gone */
     int64_t errors, reopens, error_frames;
-    double lost_us;               /* when the socket failed (mono) */
-    int64_t frames;               /* frames read */
-    uint32_t drops_seen;          /* the socket's cumulative drop count (SO_RXQ_OVFL) */
-    int64_t drops;                /* frames the kernel dropped, over every socket */
+    double lost_us;                     /* when the socket failed (mono) */
+    int64_t frames;                     /* frames read */
+    uint32_t drops_seen;                /* the socket's cumulative drop count (SO_RXQ_OVFL) */
+    int64_t drops;                      /* frames the kernel dropped, over every socket */
     int64_t drops_logged, drops_frames; /* logged so far; frames read when last grown */
-    double drops_warned_us;       /* throttles their log line */
+    double drops_warned_us;             /* throttles their log line */
 } can_t;
 
 static int can_open(const loadid_config_t *cfg, char *err, size_t errlen) {
     return loadid_socketcan_open(cfg->can_interface, cfg->can_base_id, err, errlen);
 }
 
-static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *err,
-                 size_t errlen) {
+static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *err, size_t errlen) {
     (void)opt;
     can_t *c = calloc(1, sizeof *c);
     if (!c) {
@@ -57,7 +56,9 @@ static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *er
     return 0;
 }
 
-static int fd_(const loadid_input_t *in) { return ((const can_t *)in->state)->fd; }
+static int fd_(const loadid_input_t *in) {
+    return ((const can_t *)in->state)->fd;
+}
 
 /* Frames the kernel dropped: logged when the count grew, the first time at
  * once, then at most a line a second (second() logs what waited). */
@@ -65,10 +66,11 @@ static void log_drops(const loadid_input_t *in, can_t *c) {
     const double now = loadid_mono_us();
     if (c->drops == c->drops_logged || (c->drops_logged > 0 && now - c->drops_warned_us < 1e6))
         return;
-    loadidd_log("CAN %s: %lld frames dropped by the kernel, the socket's receive buffer full "
-                "(%lld in all, learnt after %lld frames read)", in->cfg->can_interface,
-                (long long)(c->drops - c->drops_logged), (long long)c->drops,
-                (long long)c->drops_frames);
+    loadidd_log(
+        "CAN %s: %lld frames dropped by the kernel, the socket's receive buffer full "
+        "(%lld in all, learnt after %lld frames read)",
+        in->cfg->can_interface, (long long)(c->drops - c->drops_logged), (long long)c->drops,
+        (long long)c->drops_frames);
     c->drops_logged = c->drops;
     c->drops_warned_us = now;
 }
@@ -86,8 +88,10 @@ static void read_(loadid_input_t *in) {
             log_drops(in, c);
         }
         c->frames++;
-        if (rc == 2) c->error_frames++;
-        else loadid_pipeline_can_frame(in->pipe, &f);
+        if (rc == 2)
+            c->error_frames++;
+        else
+            loadid_pipeline_can_frame(in->pipe, &f);
     }
     if (rc < 0) {
         loadidd_log("CAN %s: %s; reopening", in->cfg->can_interface, strerror(-rc));
@@ -131,6 +135,10 @@ static void close_(loadid_input_t *in) {
     in->state = NULL;
 }
 
-const loadid_input_backend_t loadid_input_jr3_socketcan = {
-    .name = "jr3-socketcan", .open = open_, .fd = fd_, .read = read_, .second = second,
-    .counters = counters, .close = close_};
+const loadid_input_backend_t loadid_input_jr3_socketcan = {.name = "jr3-socketcan",
+                                                           .open = open_,
+                                                           .fd = fd_,
+                                                           .read = read_,
+                                                           .second = second,
+                                                           .counters = counters,
+                                                           .close = close_};

@@ -24,9 +24,9 @@ _Static_assert(sizeof(loadid_modbus_ft_stats_t) % sizeof(int64_t) == 0,
                "loadid_modbus_ft_stats_t holds only int64_t");
 
 struct loadid_modbus_input {
-    loadid_modbus_ft_t *ft;        /* the thread's only */
+    loadid_modbus_ft_t *ft; /* the thread's only */
     int64_t period_ns;
-    int retry_min_ms;              /* the first retry after a loss: modbus.timeout_ms */
+    int retry_min_ms; /* the first retry after a loss: modbus.timeout_ms */
     int efd;
     pthread_t thread;
     atomic_bool stop;
@@ -43,8 +43,7 @@ struct loadid_modbus_input {
     _Atomic double fs[6];
 };
 
-void loadid_modbus_input_ft_config(const loadid_config_t *cfg, loadid_modbus_ft_config_t *ft)
-{
+void loadid_modbus_input_ft_config(const loadid_config_t *cfg, loadid_modbus_ft_config_t *ft) {
     loadid_modbus_ft_config_default(ft);
     snprintf(ft->device, sizeof ft->device, "%s", cfg->modbus_device);
     ft->baud = cfg->modbus_baud;
@@ -57,22 +56,18 @@ void loadid_modbus_input_ft_config(const loadid_config_t *cfg, loadid_modbus_ft_
     memcpy(ft->fs_moment, cfg->modbus_fs_moment, sizeof ft->fs_moment);
 }
 
-static int64_t mono_ns(void)
-{
+static int64_t mono_ns(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
-static void sleep_until(int64_t t_ns)
-{
+static void sleep_until(int64_t t_ns) {
     struct timespec ts = {.tv_sec = t_ns / 1000000000, .tv_nsec = t_ns % 1000000000};
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
-    }
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {}
 }
 
-static void mirror(loadid_modbus_input_t *in)
-{
+static void mirror(loadid_modbus_input_t *in) {
     loadid_modbus_ft_stats_t st;
     int64_t v[FT_FIELDS];
     loadid_modbus_ft_stats(in->ft, &st);
@@ -82,8 +77,7 @@ static void mirror(loadid_modbus_input_t *in)
     }
 }
 
-static void publish_full_scale(loadid_modbus_input_t *in)
-{
+static void publish_full_scale(loadid_modbus_input_t *in) {
     double f[3], m[3];
     loadid_modbus_ft_full_scale(in->ft, f, m);
     for (int i = 0; i < 3; ++i) {
@@ -93,8 +87,7 @@ static void publish_full_scale(loadid_modbus_input_t *in)
 }
 
 /* Producer side. */
-static void push(loadid_modbus_input_t *in, const loadid_modbus_ft_sample_t *s)
-{
+static void push(loadid_modbus_input_t *in, const loadid_modbus_ft_sample_t *s) {
     const size_t t = atomic_load_explicit(&in->tail, memory_order_relaxed);
     const size_t h = atomic_load_explicit(&in->head, memory_order_acquire);
     if (t - h >= LOADID_MODBUS_INPUT_RING) {
@@ -112,8 +105,7 @@ static void push(loadid_modbus_input_t *in, const loadid_modbus_ft_sample_t *s)
 }
 
 /* Sleeps up to ms in short slices, returning early on stop. */
-static void pause_ms(loadid_modbus_input_t *in, int ms)
-{
+static void pause_ms(loadid_modbus_input_t *in, int ms) {
     const int64_t end = mono_ns() + (int64_t)ms * 1000000;
     while (!atomic_load(&in->stop)) {
         const int64_t now = mono_ns();
@@ -127,13 +119,11 @@ static void pause_ms(loadid_modbus_input_t *in, int ms)
 
 /* The next wait before an open attempt: twice the last, at most
  * LOADID_MODBUS_INPUT_RETRY_MS. */
-static int backoff(int ms)
-{
+static int backoff(int ms) {
     return ms >= LOADID_MODBUS_INPUT_RETRY_MS / 2 ? LOADID_MODBUS_INPUT_RETRY_MS : 2 * ms;
 }
 
-static void *poller(void *arg)
-{
+static void *poller(void *arg) {
     loadid_modbus_input_t *in = arg;
     /* Named from inside (a prctl): another thread's name is written
      * through /proc. */
@@ -192,9 +182,7 @@ static void *poller(void *arg)
 
 /* realtime.cpu and realtime.priority for the poller thread (modbus_input.h
  * says why one below the loop). 0, or -errno with the reason in err. */
-static int poller_realtime(const loadid_config_t *cfg, pthread_t thread, char *err,
-                           size_t errlen)
-{
+static int poller_realtime(const loadid_config_t *cfg, pthread_t thread, char *err, size_t errlen) {
     if (cfg->rt_cpu >= 0) {
         cpu_set_t set;
         CPU_ZERO(&set);
@@ -213,16 +201,16 @@ static int poller_realtime(const loadid_config_t *cfg, pthread_t thread, char *e
         if (rc != 0) {
             snprintf(err, errlen,
                      "realtime.priority %d: SCHED_FIFO %d for the poller thread: %s "
-                     "(LimitRTPRIO? root?)", cfg->rt_priority, prio, strerror(rc));
+                     "(LimitRTPRIO? root?)",
+                     cfg->rt_priority, prio, strerror(rc));
             return -rc;
         }
     }
     return 0;
 }
 
-int loadid_modbus_input_start(const loadid_config_t *cfg, loadid_modbus_input_t **out,
-                              char *err, size_t errlen)
-{
+int loadid_modbus_input_start(const loadid_config_t *cfg, loadid_modbus_input_t **out, char *err,
+                              size_t errlen) {
     char dummy[1];
     if (!err || errlen == 0) {
         err = dummy;
@@ -255,8 +243,8 @@ int loadid_modbus_input_start(const loadid_config_t *cfg, loadid_modbus_input_t 
         goto fail;
     }
     in->period_ns = (int64_t)(1e9 / cfg->modbus_rate_hz);
-    in->retry_min_ms = fc.timeout_ms < LOADID_MODBUS_INPUT_RETRY_MS ? fc.timeout_ms
-                                                                    : LOADID_MODBUS_INPUT_RETRY_MS;
+    in->retry_min_ms =
+        fc.timeout_ms < LOADID_MODBUS_INPUT_RETRY_MS ? fc.timeout_ms : LOADID_MODBUS_INPUT_RETRY_MS;
     if (in->period_ns < 1) in->period_ns = 1;
     atomic_init(&in->head, 0);
     atomic_init(&in->tail, 0);
@@ -284,13 +272,11 @@ fail:
     return rc;
 }
 
-int loadid_modbus_input_fd(const loadid_modbus_input_t *in)
-{
+int loadid_modbus_input_fd(const loadid_modbus_input_t *in) {
     return in ? in->efd : -1;
 }
 
-int loadid_modbus_input_drain(loadid_modbus_input_t *in, loadid_modbus_input_fn fn, void *ctx)
-{
+int loadid_modbus_input_drain(loadid_modbus_input_t *in, loadid_modbus_input_fn fn, void *ctx) {
     if (!in) {
         return 0;
     }
@@ -311,8 +297,7 @@ int loadid_modbus_input_drain(loadid_modbus_input_t *in, loadid_modbus_input_fn 
     return count;
 }
 
-int loadid_modbus_input_stats(const loadid_modbus_input_t *in, loadid_modbus_input_stats_t *st)
-{
+int loadid_modbus_input_stats(const loadid_modbus_input_t *in, loadid_modbus_input_stats_t *st) {
     if (!in || !st) {
         return -EINVAL;
     }
@@ -332,22 +317,19 @@ int loadid_modbus_input_stats(const loadid_modbus_input_t *in, loadid_modbus_inp
     return 0;
 }
 
-bool loadid_modbus_input_take_lost(loadid_modbus_input_t *in)
-{
+bool loadid_modbus_input_take_lost(loadid_modbus_input_t *in) {
     return in && atomic_exchange(&in->lost, false);
 }
 
 void loadid_modbus_input_full_scale(const loadid_modbus_input_t *in, double force[3],
-                                    double moment[3])
-{
+                                    double moment[3]) {
     for (int i = 0; i < 3; ++i) {
         force[i] = atomic_load(&in->fs[i]);
         moment[i] = atomic_load(&in->fs[3 + i]);
     }
 }
 
-void loadid_modbus_input_stop(loadid_modbus_input_t *in)
-{
+void loadid_modbus_input_stop(loadid_modbus_input_t *in) {
     if (!in) {
         return;
     }

@@ -43,7 +43,7 @@
 #include "loadid/config.h"
 #include "loadid/modbus_ft.h"
 
-#define LOADID_MODBUS_INPUT_RING 1024 /* samples: 5 s at 200 Hz; a power of 2 */
+#define LOADID_MODBUS_INPUT_RING 1024     /* samples: 5 s at 200 Hz; a power of 2 */
 #define LOADID_MODBUS_INPUT_RETRY_MS 1000 /* the longest wait between open attempts */
 
 typedef struct {
@@ -53,10 +53,10 @@ typedef struct {
     int64_t cycles_missed;       /* poll periods skipped: a transaction (a
                                     timeout, say) took longer than a period */
     int64_t open_attempts;
-    int64_t connected;           /* 1 while the device is open */
-    int64_t last_error;          /* the last failure's code
+    int64_t connected;  /* 1 while the device is open */
+    int64_t last_error; /* the last failure's code
                                     (loadid_modbus_ft_strerror), 0 none */
-    int64_t lost_error;          /* the last loss's (later failures, a
+    int64_t lost_error; /* the last loss's (later failures, a
                                     reopen's say, do not change it), 0 none */
 } loadid_modbus_input_stats_t;
 
@@ -71,8 +71,8 @@ typedef void (*loadid_modbus_input_fn)(void *ctx, const loadid_modbus_ft_sample_
  * a one-line reason in err (invalid settings, no memory, no thread, a
  * real-time setting refused: "realtime.priority 10: SCHED_FIFO 9 for the
  * poller thread: Operation not permitted (LimitRTPRIO? root?)"). */
-int loadid_modbus_input_start(const loadid_config_t *cfg, loadid_modbus_input_t **out,
-                              char *err, size_t errlen);
+int loadid_modbus_input_start(const loadid_config_t *cfg, loadid_modbus_input_t **out, char *err,
+                              size_t errlen);
 
 /* The eventfd: readable when samples wait. Never -1 after a start. */
 int loadid_modbus_input_fd(const loadid_modbus_input_t *in);

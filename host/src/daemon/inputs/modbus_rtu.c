@@ -24,11 +24,10 @@
 
 typedef struct {
     loadid_modbus_input_t *ft;
-    int64_t connected;            /* the poller's last reported state */
+    int64_t connected; /* the poller's last reported state */
 } modbus_t;
 
-static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *err,
-                 size_t errlen) {
+static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *err, size_t errlen) {
     (void)opt;
     modbus_t *m = calloc(1, sizeof *m);
     if (!m) {
@@ -70,7 +69,8 @@ static void second(loadid_input_t *in) {
     if (lost)
         loadidd_log("modbus %s lost: %s; reopening", in->cfg->modbus_device,
                     loadid_modbus_ft_strerror((int)ms.lost_error));
-    if (ms.connected && (!m->connected || lost)) loadidd_log("modbus %s open", in->cfg->modbus_device);
+    if (ms.connected && (!m->connected || lost))
+        loadidd_log("modbus %s open", in->cfg->modbus_device);
     m->connected = ms.connected;
 }
 
@@ -84,16 +84,15 @@ static void counters(const loadid_input_t *in, loadid_input_counters_t *out) {
 static void summary(const loadid_input_t *in) {
     loadid_modbus_input_stats_t ms;
     if (loadid_modbus_input_stats(((const modbus_t *)in->state)->ft, &ms) != 0) return;
-    loadidd_log("modbus reads %lld, samples ok %lld, rejected %lld, stale %lld, gaps %lld, "
-                "malformed %lld, timeouts %lld, bad frames %lld (CRC %lld), exceptions %lld, "
-                "device lost %lld, ring overruns %lld, cycles missed %lld",
-                (long long)ms.ft.reads, (long long)ms.ft.samples_ok,
-                (long long)ms.ft.samples_rejected, (long long)ms.ft.samples_stale,
-                (long long)ms.ft.counter_gaps, (long long)ms.ft.samples_malformed,
-                (long long)ms.ft.timeouts, (long long)ms.ft.bad_frames,
-                (long long)ms.ft.crc_errors, (long long)ms.ft.exceptions,
-                (long long)ms.ft.device_lost, (long long)ms.ring_overruns,
-                (long long)ms.cycles_missed);
+    loadidd_log(
+        "modbus reads %lld, samples ok %lld, rejected %lld, stale %lld, gaps %lld, "
+        "malformed %lld, timeouts %lld, bad frames %lld (CRC %lld), exceptions %lld, "
+        "device lost %lld, ring overruns %lld, cycles missed %lld",
+        (long long)ms.ft.reads, (long long)ms.ft.samples_ok, (long long)ms.ft.samples_rejected,
+        (long long)ms.ft.samples_stale, (long long)ms.ft.counter_gaps,
+        (long long)ms.ft.samples_malformed, (long long)ms.ft.timeouts, (long long)ms.ft.bad_frames,
+        (long long)ms.ft.crc_errors, (long long)ms.ft.exceptions, (long long)ms.ft.device_lost,
+        (long long)ms.ring_overruns, (long long)ms.cycles_missed);
 }
 
 static void close_(loadid_input_t *in) {
@@ -106,6 +105,12 @@ static void close_(loadid_input_t *in) {
 
 /* A loss or a reopen since the last once-a-second look is said at the
  * stop too. */
-const loadid_input_backend_t loadid_input_modbus_rtu = {
-    .name = "modbus-rtu", .open = open_, .fd = fd_, .read = read_, .second = second,
-    .finish = second, .counters = counters, .summary = summary, .close = close_};
+const loadid_input_backend_t loadid_input_modbus_rtu = {.name = "modbus-rtu",
+                                                        .open = open_,
+                                                        .fd = fd_,
+                                                        .read = read_,
+                                                        .second = second,
+                                                        .finish = second,
+                                                        .counters = counters,
+                                                        .summary = summary,
+                                                        .close = close_};

@@ -38,14 +38,14 @@ typedef struct {
     int timer_fd;
     const char *dir;
     loadid_recording_reader_t *rec;
-    int have_next;                /* the next event is read ahead */
+    int have_next; /* the next event is read ahead */
     loadid_rec_event_t next;
-    int64_t rec_t0;               /* the first event's time in the recording */
-    int64_t shift;                /* wall time less the recording's */
-    double mono_t0;               /* when the first event is due (mono) */
+    int64_t rec_t0; /* the first event's time in the recording */
+    int64_t shift;  /* wall time less the recording's */
+    double mono_t0; /* when the first event is due (mono) */
     int with_commands;
     char joints[128], command[128];
-    loadid_lcm_joint_state_t js;  /* decoded here: two arrays of 16 doubles */
+    loadid_lcm_joint_state_t js; /* decoded here: two arrays of 16 doubles */
     int64_t events, joint_states, joint_states_bad, commands, commands_bad;
 } replay_t;
 
@@ -54,8 +54,10 @@ static int next_event(replay_t *r) {
     const int rc = loadid_recording_reader_next(r->rec, &r->next);
     if (rc >= 0) return rc == 1;
     const char *lcm_err = loadid_recording_lcm_error(r->rec);
-    if (*lcm_err) loadidd_log("replay: %s/lcm.log: %s; the rest is not replayed", r->dir, lcm_err);
-    else loadidd_log("replay: %s/can.log: read error; the rest is not replayed", r->dir);
+    if (*lcm_err)
+        loadidd_log("replay: %s/lcm.log: %s; the rest is not replayed", r->dir, lcm_err);
+    else
+        loadidd_log("replay: %s/can.log: read error; the rest is not replayed", r->dir);
     return 0;
 }
 
@@ -66,11 +68,15 @@ static void feed(loadid_input_t *in, replay_t *r, const loadid_rec_event_t *ev, 
         case LOADID_REC_CAN: {
             loadid_can_frame_t f = ev->can;
             f.t_us += r->shift;
-            if (loadid_pipeline_can_frame(in->pipe, &f)) loadid_input_late(in, loadid_mono_us() - due);
+            if (loadid_pipeline_can_frame(in->pipe, &f))
+                loadid_input_late(in, loadid_mono_us() - due);
             return;
         }
-        case LOADID_REC_BAD_LINE: loadid_pipeline_bad_frame(in->pipe); return;
-        case LOADID_REC_LCM: break;
+        case LOADID_REC_BAD_LINE:
+            loadid_pipeline_bad_frame(in->pipe);
+            return;
+        case LOADID_REC_LCM:
+            break;
     }
     const size_t len = ev->datalen < 0 ? 0 : (size_t)ev->datalen;
     if (strcmp(ev->channel, r->joints) == 0) {
@@ -85,8 +91,10 @@ static void feed(loadid_input_t *in, replay_t *r, const loadid_rec_event_t *ev, 
     } else if (r->with_commands && strcmp(ev->channel, r->command) == 0) {
         loadid_lcm_command_t m;
         r->commands++;
-        if (loadid_lcm_decode_command(ev->data, len, &m) < 0) r->commands_bad++;
-        else loadid_pipeline_command(in->pipe, ev->t_us + r->shift, m.action, m.load_name);
+        if (loadid_lcm_decode_command(ev->data, len, &m) < 0)
+            r->commands_bad++;
+        else
+            loadid_pipeline_command(in->pipe, ev->t_us + r->shift, m.action, m.load_name);
     }
 }
 
@@ -107,12 +115,12 @@ static void feed_due(loadid_input_t *in) {
     }
     if (!r->have_next) return;
     const double due = r->mono_t0 + (double)(r->next.t_us - r->rec_t0);
-    struct itimerspec its = {{0, 0}, {(time_t)(due / 1e6), (long)(due - (double)(time_t)(due / 1e6) * 1e6) * 1000}};
+    struct itimerspec its = {
+        {0, 0}, {(time_t)(due / 1e6), (long)(due - (double)(time_t)(due / 1e6) * 1e6) * 1000}};
     timerfd_settime(r->timer_fd, TFD_TIMER_ABSTIME, &its, NULL);
 }
 
-static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *err,
-                 size_t errlen) {
+static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *err, size_t errlen) {
     replay_t *r = calloc(1, sizeof *r);
     if (!r) {
         snprintf(err, errlen, "out of memory");
@@ -148,7 +156,9 @@ static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *er
     return 0;
 }
 
-static int fd_(const loadid_input_t *in) { return ((const replay_t *)in->state)->timer_fd; }
+static int fd_(const loadid_input_t *in) {
+    return ((const replay_t *)in->state)->timer_fd;
+}
 
 static void read_(loadid_input_t *in) {
     replay_t *r = in->state;
@@ -164,9 +174,11 @@ static void counters(const loadid_input_t *in, loadid_input_counters_t *out) {
 
 static void summary(const loadid_input_t *in) {
     const replay_t *r = in->state;
-    loadidd_log("replay events %lld, joint states %lld (undecodable %lld), commands %lld "
-                "(undecodable %lld)", (long long)r->events, (long long)r->joint_states,
-                (long long)r->joint_states_bad, (long long)r->commands, (long long)r->commands_bad);
+    loadidd_log(
+        "replay events %lld, joint states %lld (undecodable %lld), commands %lld "
+        "(undecodable %lld)",
+        (long long)r->events, (long long)r->joint_states, (long long)r->joint_states_bad,
+        (long long)r->commands, (long long)r->commands_bad);
 }
 
 static void close_(loadid_input_t *in) {
@@ -178,6 +190,11 @@ static void close_(loadid_input_t *in) {
     in->state = NULL;
 }
 
-const loadid_input_backend_t loadid_input_replay = {
-    .name = "replay", .open = open_, .fd = fd_, .read = read_, .catch_up = feed_due,
-    .counters = counters, .summary = summary, .close = close_};
+const loadid_input_backend_t loadid_input_replay = {.name = "replay",
+                                                    .open = open_,
+                                                    .fd = fd_,
+                                                    .read = read_,
+                                                    .catch_up = feed_due,
+                                                    .counters = counters,
+                                                    .summary = summary,
+                                                    .close = close_};
