@@ -6,8 +6,11 @@ estimates are loadidd --offline's on the same recording to 1e-9, as the
 other live sessions' are, and they arrive over LCM: estimate_t while
 estimating and at DONE, load_model_t, status_t with the state changes,
 wrench_t once DONE; and the loop allocates nothing meanwhile (release
-build). Plus the refusals of the command line, which need no session,
-and a SIGTERM while REFINED runs (LCM on memq://): the stop waits for it."""
+build). With results.trace the session's every estimate is traced beside
+its saved result, as --offline --trace traces the recording, and `loadid
+plot RESULT_DIR` draws it. Plus the refusals of the command line, which
+need no session, and a SIGTERM while REFINED runs (LCM on memq://): the
+stop waits for it."""
 
 from __future__ import annotations
 
@@ -27,6 +30,7 @@ from alloc_report import counts, loop_sites
 from recordings import program
 from test_live_lcm import run_in_netns
 from test_live_no_alloc import counted
+from test_plot import png_size, read_rows
 
 NAMES = {1: "RLS", 2: "RIV", 3: "RTLS", 6: "REFINED"}
 
@@ -41,12 +45,21 @@ def config(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def session(config, recording, tmp_path_factory):
-    """The session; in the release build (not under the sanitizers, whose
-    allocator it would meet) with the allocation counter preloaded into the
-    daemon, as test_live_no_alloc.py runs the other sessions."""
+    """The session, its result saved and traced (results.trace: the trace
+    writer's thread is inside the allocation count too); in the release
+    build (not under the sanitizers, whose allocator it would meet) with
+    the allocation counter preloaded into the daemon, as
+    test_live_no_alloc.py runs the other sessions."""
+    d = tmp_path_factory.mktemp("replay_traced")
+    traced = d / "c.yaml"
+    traced.write_text(config.read_text() + f"results:\n  directory: {d / 'results'}\n"
+                      "  trace: true\n")
+
     def run():
-        return run_in_netns("replay_session.py", program("LOADIDD_EXE"), config, recording,
-                            os.environ["LOADID_LCM_PYTHON_DIR"])
+        out = run_in_netns("replay_session.py", program("LOADIDD_EXE"), traced, recording,
+                           os.environ["LOADID_LCM_PYTHON_DIR"])
+        out["results"] = d / "results"
+        return out
     if not os.environ.get("LOADID_ALLOC_COUNT_LIB"):
         return run()
     return counted(tmp_path_factory.mktemp("replay_alloc"), run)
@@ -110,6 +123,54 @@ def test_model_status_and_wrench_over_lcm(session, offline):
     assert last["state"] == 3 and last["samples_ok"] == offline["samples_ok"], last
     assert last["frames_bad"] == last["sequence_gaps"] == last["joint_msgs_bad"] == 0, last
     assert session["wrench"] > 500  # every sample after DONE (0.8 s of the recording)
+
+
+def test_the_session_is_traced_beside_its_saved_result(session, offline, config, recording,
+                                                      tmp_path):
+    """results.trace: <stem>.trace.csv beside the saved <stem>.yaml, every
+    estimate the session published (estimation.publish_every 1: a row per
+    on-line method per sample while estimating, then each method's final,
+    REFINED's last), each method's last row the final estimate_t's phi (to
+    the CSV's 9 digits), and --offline --trace --publish-every 1 on the
+    recording gives the same rows; `loadid plot RESULT_DIR` draws it."""
+    saved = re.search(r"^loadidd: saved (\S+)\.yaml$", session["stderr"], re.M)
+    traced = re.search(r"^loadidd: traced (\S+) \((\d+) rows\)$", session["stderr"], re.M)
+    assert saved and traced, session["stderr"]
+    path = pathlib.Path(traced.group(1))
+    assert path == pathlib.Path(saved.group(1) + ".trace.csv") and path.parent == \
+        session["results"], (saved.group(0), traced.group(0))
+    assert not list(session["results"].glob(".*.tmp")), list(session["results"].iterdir())
+    rows = read_rows(path)
+    assert len(rows) == int(traced.group(2)) >= 3 * 1400 + 4, len(rows)
+    phi = [f"phi{i}" for i in range(10)]
+    last = {}
+    for r in rows:
+        last[r["method"]] = r
+    assert sorted(last) == sorted(NAMES.values()) and rows[-1]["method"] == "REFINED", last
+    # The CSV's %.9g holds 9 significant digits: equal to 5e-9.
+    finals = {NAMES[e["method"]]: e for e in session["estimate"] if e["state"] == 3}
+    for m, r in last.items():
+        np.testing.assert_allclose([r[k] for k in phi], finals[m]["phi"], rtol=1e-8, atol=1e-12)
+        np.testing.assert_allclose([r[k] for k in phi], offline["result"][m]["phi"], rtol=1e-8,
+                                   atol=1e-12)
+    # The recording traced offline: the same rows.
+    off = tmp_path / "offline.csv"
+    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(config), "--offline",
+                        str(recording), "--trace", str(off), "--publish-every", "1"],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    orows = read_rows(off)
+    assert [(o["method"], o["samples"]) for o in orows] == \
+        [(x["method"], x["samples"]) for x in rows]
+    cols = [k for k in rows[0] if k != "method"]
+    np.testing.assert_allclose([[x[k] for k in cols] for x in rows],
+                               [[o[k] for k in cols] for o in orows], rtol=1e-9, atol=1e-9)
+    r = subprocess.run([program("LOADID_CLI_EXE"), "plot", str(session["results"])],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    for suffix in ("estimates.png", "residual.png"):
+        (w, h), size = png_size(path.parent / f"{path.stem}-{suffix}")
+        assert 800 <= w <= 4000 and 400 <= h <= 3000 and size > 20_000, (suffix, w, h, size)
 
 
 def test_replay_options_refused_where_they_do_not_apply(recording, tmp_path):

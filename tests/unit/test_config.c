@@ -543,6 +543,13 @@ static void relative_urdf_paths_follow_the_config_file(void **state) {
     snprintf(expected, sizeof expected, "%s/sub/out", g_dir);
     assert_string_equal(c.results_directory, expected);
     assert_string_equal(c.results_load, "/r/latest.yaml");
+    /* results.trace (addition): default false, and only with a directory. */
+    assert_int_equal(c.results_trace, 0);
+    load_ok(write_file("sub/t.yaml", "results:\n  directory: out\n  trace: true\n"), &c, &w);
+    assert_int_equal(c.results_trace, 1);
+    expect_error("results:\n  trace: true\n",
+                 "2: results.trace: needs results.directory (the trace goes beside the saved "
+                 "result)");
 
     /* A relative config path: made absolute against the working directory. */
     char cwd[512], here[512];

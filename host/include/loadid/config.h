@@ -155,9 +155,13 @@ typedef struct {
      * each finished estimate (YAML with a URDF <inertial> snippet) and
      * latest.yaml; "" (default) saves nothing. load: a saved estimate to
      * start from (state DONE, wrench_t flowing); "" (default) none. Both
-     * relative to the configuration file. */
+     * relative to the configuration file. trace: also every estimate the
+     * session published, as the trace CSV of loadidd --offline --trace,
+     * beside the saved result (<name>.trace.csv); default false; needs
+     * directory. */
     char results_directory[LOADID_PATH_MAX];
     char results_load[LOADID_PATH_MAX];
+    int results_trace;
 
     /* noise: (loadid) standard deviations of the measurements, for the
      * estimators' weights (loadid_est_weights_from_noise). "noise: auto"

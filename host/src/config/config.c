@@ -543,6 +543,10 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
     TRY(read_section(root, "results", &s));
     TRY(read_path(s, path, "directory", c->results_directory, sizeof c->results_directory));
     TRY(read_path(s, path, "load", c->results_load, sizeof c->results_load));
+    TRY(read_bool_key(s, "trace", &c->results_trace));
+    if (c->results_trace && !c->results_directory[0])
+        return loadid_yaml_fail(loadid_yaml_get(s, "trace"),
+                                "needs results.directory (the trace goes beside the saved result)");
 
     TRY(read_noise(root, c));
 

@@ -14,7 +14,9 @@
  * The pipeline's outputs go out on LCM as they come (lcm_out.c): estimate_t
  * on LOADID_ESTIMATE, wrench_t on LOADID_WRENCH, and at DONE load_model_t
  * on LOADID_MODEL with the estimate handed to the save worker (results.c,
- * save_worker.h), which writes it on a thread of its own. status_t also goes
+ * save_worker.h), which writes it on a thread of its own; with
+ * results.trace every estimate also goes to the trace writer
+ * (trace_worker.h), a thread of its own too. status_t also goes
  * out at every state change, once the event that made it is handled, with
  * the change's time as its utime: a command's change carries the command's
  * own utime, which is how the CLI knows the acknowledgement of its
@@ -73,8 +75,9 @@ typedef struct {
     int refined_fd; /* REFINED's worker's end (worker.h), or -1 */
     loadid_loop_times_t times;
     int ticks;
-    int done_pending;            /* DONE reached: save the estimate */
-    loadid_save_worker_t *saver; /* results.directory set, else NULL */
+    int done_pending;              /* DONE reached: save the estimate */
+    loadid_save_worker_t *saver;   /* results.directory set, else NULL */
+    loadid_trace_worker_t *tracer; /* results.trace set, else NULL */
     struct {
         int64_t utime;
         int8_t state;
@@ -90,7 +93,9 @@ static void publish(live_t *L, int ch, int n) {
 }
 
 static void on_estimate(void *ctx, const loadid_pipeline_estimate_t *e) {
-    publish(ctx, CH_ESTIMATE, loadid_lcm_out_estimate(e, tx_buf, sizeof tx_buf));
+    live_t *L = ctx;
+    publish(L, CH_ESTIMATE, loadid_lcm_out_estimate(e, tx_buf, sizeof tx_buf));
+    loadid_results_trace_row(L->tracer, e);
 }
 
 static void on_wrench(void *ctx, int64_t utime, const double f[3], const double t[3]) {
@@ -100,6 +105,7 @@ static void on_wrench(void *ctx, int64_t utime, const double f[3], const double 
 static void on_state(void *ctx, int64_t utime, int state, const char *reason) {
     live_t *L = ctx;
     if (state == LOADID_STATE_DONE) L->done_pending = 1;
+    loadid_results_trace_state(L->tracer, utime, state);
     /* Published after the event (the pipeline is mid-call here); more
      * changes than room within one event keep the first ones and the last. */
     const int k = L->num_changes < 8 ? L->num_changes++ : 7;
@@ -138,7 +144,10 @@ static void save_done(live_t *L) {
     L->done_pending = 0;
     loadid_pipeline_estimate_t e;
     loadid_pipeline_compensation_t c;
-    if (loadid_pipeline_final(L->pipe, &e, &c) != 0) return;
+    const int final = loadid_pipeline_final(L->pipe, &e, &c) == 0;
+    /* Every row is in: the on-line finals at DONE, REFINED's collected. */
+    loadid_results_trace_end(L->tracer, final ? &e : NULL);
+    if (!final) return;
     if (e.has_model) publish(L, CH_MODEL, loadid_lcm_out_load_model(&e, tx_buf, sizeof tx_buf));
     loadid_results_save(L->cfg, L->saver, &e, &c);
 }
@@ -302,6 +311,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
     /* The save worker likewise (save_worker.h: the disk's waits off the
      * loop), before the Modbus poller (the input) and the real-time set-up. */
     if (rc == 0) rc = loadid_results_start(cfg, &L.saver);
+    if (rc == 0) rc = loadid_results_trace_start(cfg, L.pipe, &L.tracer);
     if (rc == 0) rc = open_input(&L);
     if (rc == 0) sync_input_fd(&L, ep);
     if (rc == 0 && loadid_realtime_setup(cfg, err, sizeof err) != 0) {
@@ -356,6 +366,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         /* The model and the saved result wait for REFINED, which may be the best. */
         if (L.done_pending && !loadid_pipeline_refined_pending(L.pipe)) save_done(&L);
         loadid_results_log(L.saver);
+        loadid_results_trace_log(L.tracer);
         if (stop) break;
     }
     loadid_notify_stopping();
@@ -370,7 +381,8 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
         loadid_input_summary(&L.input);
     }
     publish_status(&L, 1, 0, 0);
-    loadid_results_stop(L.saver); /* the saves submitted end, and are logged */
+    loadid_results_stop(L.saver);        /* the saves submitted end, and are logged */
+    loadid_results_trace_stop(L.tracer); /* likewise the trace */
     loadid_input_close(&L.input);
     if (ep >= 0) close(ep);
     if (tick_fd >= 0) close(tick_fd);

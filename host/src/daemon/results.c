@@ -51,3 +51,53 @@ void loadid_results_stop(loadid_save_worker_t *saver) {
     loadid_results_log(saver);
     loadid_save_worker_destroy(saver);
 }
+
+int loadid_results_trace_start(const loadid_config_t *cfg, loadid_pipeline_t *pipe,
+                               loadid_trace_worker_t **tracer) {
+    *tracer = NULL;
+    if (!cfg->results_trace) return 0;
+    loadid_pipeline_std_always(pipe, 1);
+    loadid_pipeline_trace_rows(pipe, 1);
+    const int rc = loadid_trace_worker_start(cfg->results_directory, tracer);
+    if (rc != 0) {
+        loadidd_log("cannot start the trace writer: %s", strerror(-rc));
+        return 1;
+    }
+    return 0;
+}
+
+void loadid_results_trace_state(loadid_trace_worker_t *tracer, int64_t utime, int state) {
+    if (!tracer) return;
+    if (state == LOADID_STATE_ESTIMATING && loadid_trace_worker_begin(tracer, utime) != 0)
+        loadidd_log("results.trace: the session of %lld not traced: %d entries wait for the disk",
+                    (long long)utime, LOADID_TRACE_WORKER_ROWS);
+    if (state == LOADID_STATE_IDLE || state == LOADID_STATE_FAILED)
+        loadid_results_trace_end(tracer, NULL);
+}
+
+void loadid_results_trace_row(loadid_trace_worker_t *tracer, const loadid_pipeline_estimate_t *e) {
+    if (tracer && loadid_trace_worker_row(tracer, e) != 0)
+        loadidd_log("results.trace: %d rows wait for the disk: rows dropped (counted)",
+                    LOADID_TRACE_WORKER_ROWS);
+}
+
+void loadid_results_trace_end(loadid_trace_worker_t *tracer,
+                              const loadid_pipeline_estimate_t *final_est) {
+    if (tracer && loadid_trace_worker_end(tracer, final_est) != 0)
+        loadidd_log("results.trace: %d entries wait for the disk: the trace stays open",
+                    LOADID_TRACE_WORKER_ROWS);
+}
+
+void loadid_results_trace_log(loadid_trace_worker_t *tracer) {
+    char msg[4608];
+    while (tracer && loadid_trace_worker_collect(tracer, msg, sizeof msg) != 0)
+        loadidd_log("%s", msg);
+}
+
+void loadid_results_trace_stop(loadid_trace_worker_t *tracer) {
+    if (!tracer) return;
+    loadid_trace_worker_end(tracer, NULL);
+    loadid_trace_worker_stop(tracer);
+    loadid_results_trace_log(tracer);
+    loadid_trace_worker_destroy(tracer);
+}

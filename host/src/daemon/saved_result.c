@@ -132,6 +132,16 @@ static int write_one(const char *path, const char *text, size_t n) {
     return rc;
 }
 
+void loadid_saved_result_name(const char *dir, const char *load_name, int64_t utime,
+                              const char *ext, char *out, size_t len) {
+    char safe[LOADID_LOAD_NAME_MAX];
+    size_t k = 0;
+    for (const char *s = load_name; *s && k + 1 < sizeof safe; ++s)
+        safe[k++] = (*s == '/' || *s == '.' || (unsigned char)*s < 0x20) ? '_' : *s;
+    safe[k] = 0;
+    snprintf(out, len, "%s/%s-%lld%s", dir, k ? safe : "load", (long long)utime, ext);
+}
+
 int loadid_saved_result_write(const char *dir, const loadid_pipeline_estimate_t *est,
                               const loadid_pipeline_compensation_t *comp, char *path,
                               size_t pathlen, char *err, size_t errlen) {
@@ -140,12 +150,8 @@ int loadid_saved_result_write(const char *dir, const loadid_pipeline_estimate_t 
         snprintf(err, errlen, "%s: cannot create: %s", dir, strerror(e));
         return -e;
     }
-    char name[4400], latest[4400], safe[LOADID_LOAD_NAME_MAX];
-    size_t k = 0;
-    for (const char *s = est->load_name; *s && k + 1 < sizeof safe; ++s)
-        safe[k++] = (*s == '/' || *s == '.' || (unsigned char)*s < 0x20) ? '_' : *s;
-    safe[k] = 0;
-    snprintf(name, sizeof name, "%s/%s-%lld.yaml", dir, k ? safe : "load", (long long)est->utime);
+    char name[4400], latest[4400];
+    loadid_saved_result_name(dir, est->load_name, est->utime, ".yaml", name, sizeof name);
     snprintf(latest, sizeof latest, "%s/latest.yaml", dir);
     char text[8192]; /* about 3.5 kB: 84 numbers of up to 24 characters, the name, the text */
     doc_t d = {text, sizeof text, 0, 0};

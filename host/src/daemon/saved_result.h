@@ -18,8 +18,15 @@
 #define LOADID_SAVED_RESULT_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "loadid/pipeline.h"
+
+/* dir/<load_name or "load">-<utime><ext>, the load name's '/', '.' and
+ * control characters made '_': the saved result's name (ext ".yaml"),
+ * and its trace's (".trace.csv", trace_worker.h). */
+void loadid_saved_result_name(const char *dir, const char *load_name, int64_t utime,
+                              const char *ext, char *out, size_t len);
 
 /* Writes dir/<load_name or "load">-<utime>.yaml and dir/latest.yaml
  * (created if missing), each through a .tmp file synced and renamed over

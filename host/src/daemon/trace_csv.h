@@ -24,25 +24,29 @@
  * [rad/s^2]), gravity in S at zeroing (0 with the offset model), and the
  * residual wrench this row's estimate leaves on it, f - A(a - g + g_init,
  * omega, alpha) phi - offset ("nan" when !valid), so it can be checked
- * from the row alone. Numbers %.9g. Offline only: stdio, buffered.
+ * from the row alone. Numbers %.9g. Written through a buffer of its own
+ * with open and write, no stdio: nothing here allocates, so loadidd's trace
+ * writer (trace_worker.h, results.trace) can use it after start-up too.
  */
 #ifndef LOADID_TRACE_CSV_H
 #define LOADID_TRACE_CSV_H
 
 #include <stddef.h>
 #include <stdint.h>
-#include <stdio.h>
 
 #include "loadid/pipeline.h"
 
 typedef struct {
-    FILE *out;
+    int fd; /* -1: closed */
     const char *path;
     int64_t start_us; /* START of the current run */
     int errnum;       /* the first failed write's errno */
+    size_t len;       /* of buf, not yet written */
+    char buf[32768];
 } loadid_trace_csv_t;
 
-/* Creates path and writes the header. Returns 0, or -errno with
+/* Creates path (truncated; path must outlive t) and writes the header.
+ * Returns 0, or -errno with
  * "cannot write PATH: reason" in err. */
 int loadid_trace_csv_open(loadid_trace_csv_t *t, const char *path, char *err, size_t errlen);
 
