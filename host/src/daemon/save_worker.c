@@ -2,6 +2,8 @@
 #define _GNU_SOURCE /* pthread_setname_np */
 #include "save_worker.h"
 
+#include "background_thread.h"
+
 #include <errno.h>
 #include <pthread.h>
 #include <sched.h>
@@ -84,22 +86,7 @@ int loadid_save_worker_start(const char *dir, loadid_save_worker_t **out) {
     atomic_init(&w->submitted, 0);
     atomic_init(&w->ended, 0);
     atomic_init(&w->quit, false);
-    /* Normal scheduling and every signal blocked, whatever the creating
-     * thread has: a real-time loop preempts the disk's waits, and SIGTERM
-     * goes to the loop's signalfd. */
-    pthread_attr_t attr;
-    pthread_attr_init(&attr);
-    pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
-    pthread_attr_setschedpolicy(&attr, SCHED_OTHER);
-    struct sched_param sp = {.sched_priority = 0};
-    pthread_attr_setschedparam(&attr, &sp);
-    pthread_attr_setstacksize(&attr, STACK_BYTES);
-    sigset_t all, old;
-    sigfillset(&all);
-    pthread_sigmask(SIG_SETMASK, &all, &old);
-    const int rc = pthread_create(&w->thread, &attr, run, w);
-    pthread_sigmask(SIG_SETMASK, &old, NULL);
-    pthread_attr_destroy(&attr);
+    const int rc = loadid_background_thread_create(&w->thread, run, w, STACK_BYTES);
     if (rc != 0) {
         sem_destroy(&w->wake);
         free(w->slots);

@@ -2,6 +2,8 @@
 #define _GNU_SOURCE /* pthread_setname_np */
 #include "trace_worker.h"
 
+#include "background_thread.h"
+
 #include <errno.h>
 #include <pthread.h>
 #include <sched.h>
@@ -168,20 +170,7 @@ int loadid_trace_worker_start(const char *dir, loadid_trace_worker_t **out) {
     atomic_init(&w->made, 0);
     atomic_init(&w->taken, 0);
     atomic_init(&w->quit, false);
-    /* As save_worker.c's: normal scheduling, every signal blocked. */
-    pthread_attr_t attr;
-    pthread_attr_init(&attr);
-    pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
-    pthread_attr_setschedpolicy(&attr, SCHED_OTHER);
-    struct sched_param sp = {.sched_priority = 0};
-    pthread_attr_setschedparam(&attr, &sp);
-    pthread_attr_setstacksize(&attr, STACK_BYTES);
-    sigset_t all, old;
-    sigfillset(&all);
-    pthread_sigmask(SIG_SETMASK, &all, &old);
-    const int rc = pthread_create(&w->thread, &attr, run, w);
-    pthread_sigmask(SIG_SETMASK, &old, NULL);
-    pthread_attr_destroy(&attr);
+    const int rc = loadid_background_thread_create(&w->thread, run, w, STACK_BYTES);
     if (rc != 0) {
         sem_destroy(&w->wake);
         free(w->ring);
