@@ -171,6 +171,17 @@ extern "C" int loadid_est_set_exact(loadid_est_t *est, const loadid_real_t *col_
     return 0;
 }
 
+extern "C" int loadid_est_set_offset_cov(loadid_est_t *est, const loadid_real_t cov[36]) {
+    if (!est || !cov) return -EINVAL;
+    for (int i = 0; i < LOADID_NROWS; ++i) {
+        if (!std::isfinite(cov[7 * i]) || cov[7 * i] < 0) return -EINVAL;
+        for (int j = 0; j < LOADID_NROWS; ++j)
+            if (!std::isfinite(cov[6 * i + j]) || cov[6 * i + j] != cov[6 * j + i]) return -EINVAL;
+    }
+    std::memcpy(est->cfg.offset_cov, cov, sizeof est->cfg.offset_cov);
+    return 0;
+}
+
 extern "C" int loadid_est_rescale(loadid_est_t *est, loadid_real_t force, loadid_real_t torque,
                                   loadid_real_t columns) {
     if (!est || !positive_finite(force) || !positive_finite(torque) || !positive_finite(columns))

@@ -33,6 +33,7 @@ class Excitation {
         warm_ = false;
         gram_.setZero();
         gram_torque_.setZero();
+        row_sum_.setZero();
     }
 
     void set_weights(const Vec6 &row_weight, const Vec<N1> &col_weight) {
@@ -51,7 +52,10 @@ class Excitation {
         c(N) = 1;
         gram_ = c.asDiagonal() * (wf * (gram_ - gram_torque_) + wt * gram_torque_) * c.asDiagonal();
         gram_torque_ = wt * (c.asDiagonal() * gram_torque_ * c.asDiagonal());
-        for (int i = 0; i < LOADID_NROWS; ++i) d_(i) /= i < 3 ? force : torque;
+        for (int i = 0; i < LOADID_NROWS; ++i) {
+            d_(i) /= i < 3 ? force : torque;
+            row_sum_.row(i) *= columns / (i < 3 ? force : torque);
+        }
         t_.template head<N>() *= columns;
     }
 
@@ -64,7 +68,9 @@ class Excitation {
         if (forgetting != Real(1)) {
             gram_ = forgetting * gram_;
             gram_torque_ = forgetting * gram_torque_;
+            row_sum_ = forgetting * row_sum_;
         }
+        row_sum_ += W.template leftCols<N>();
         // Only the lower triangle is computed and read (the eigen-solvers take
         // it): the Gram matrix is exactly symmetric, and half the work. The
         // loop sums in the order of Eigen's selfadjointView().rankUpdate()
@@ -144,6 +150,10 @@ class Excitation {
     const Eigen::Matrix<Real, N1, N1> &gram() const { return gram_; }
     const Eigen::Matrix<Real, N1, N1> &gram_torque() const { return gram_torque_; }
     const Vec<N1> &col_weight() const { return t_; }
+    const Vec6 &row_weight() const { return d_; }
+    // sum_k D A_k T1, what one wrench error shared by every row (the
+    // zeroing offset's) moves the estimate by (uncertainty.hpp).
+    const Eigen::Matrix<Real, LOADID_NROWS, N> &row_sum() const { return row_sum_; }
 
   private:
     static constexpr int kWarmSteps = 4;
@@ -222,6 +232,7 @@ class Excitation {
     mutable bool warm_ = false;
     Eigen::Matrix<Real, N1, N1> gram_;
     Eigen::Matrix<Real, N1, N1> gram_torque_;
+    Eigen::Matrix<Real, LOADID_NROWS, N> row_sum_;
 };
 
 inline Vec6 row_weights(const loadid_est_config_t &cfg) {

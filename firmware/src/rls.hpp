@@ -89,7 +89,10 @@ class RecursiveLs final : public loadid_est {
                 samples_,
                 phi,
                 instrumental_ ? M_.data() : nullptr,
-                instrumental_ ? CC_.data() : nullptr};
+                instrumental_ ? CC_.data() : nullptr,
+                excitation_.row_sum().data(),
+                excitation_.row_weight().data(),
+                N == LOADID_NPHI ? cfg.offset_cov : nullptr};
     }
 
   private:

@@ -155,7 +155,10 @@ class Rtls final : public loadid_est {
                 samples_,
                 phi,
                 nullptr,
-                nullptr};
+                nullptr,
+                excitation_.row_sum().data(),
+                excitation_.row_weight().data(),
+                N == LOADID_NPHI ? cfg.offset_cov : nullptr};
     }
 
   private:

@@ -35,6 +35,26 @@ bool spd_inverse(const Md &S, Md &inv) {
     return true;
 }
 
+// J Sigma_y0 J^T, J = inv sum_k A_k^T W: the estimate's covariance from the
+// zeroing offset's error (uncertainty.hpp); zero without one.
+Md offset_share(const CovInput &in, const Vd &t, const Md &inv) {
+    const int n = in.n;
+    Md out = Md::Zero(n, n);
+    if (!in.offset_cov || !in.row_sum || !in.row_weight) return out;
+    Md cov0(LOADID_NROWS, LOADID_NROWS), s(n, LOADID_NROWS);
+    for (int r = 0; r < LOADID_NROWS; ++r)
+        for (int c = 0; c < LOADID_NROWS; ++c)
+            cov0(r, c) = static_cast<double>(in.offset_cov[LOADID_NROWS * r + c]);
+    if (!(cov0.cwiseAbs().maxCoeff() > 0)) return out;
+    // sum_k A_k^T D^2 = T1^-1 (sum_k D A_k T1)^T D.
+    for (int j = 0; j < n; ++j)
+        for (int r = 0; r < LOADID_NROWS; ++r)
+            s(j, r) = static_cast<double>(in.row_sum[LOADID_NROWS * j + r]) / t(j) *
+                      static_cast<double>(in.row_weight[r]);
+    const Md jac = inv * s;
+    return jac * cov0 * jac.transpose();
+}
+
 } // namespace
 
 int covariance_std(const CovInput &in, Real *std, Real *scale) {
@@ -73,7 +93,7 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
         Eigen::PartialPivLU<Md> lu(m);
         const Md mi = lu.inverse();
         if (!mi.allFinite()) return LOADID_E_NOT_EXCITED;
-        cov = s2 * mi * cc * mi.transpose();
+        cov = s2 * mi * cc * mi.transpose() + offset_share(in, t, mi);
     } else {
         Md h = g.topLeftCorner(n, n);
         if (in.kind == CovKind::TLS) {
@@ -90,7 +110,7 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
         Md hi;
         if (!spd_inverse(h, hi)) return LOADID_E_NOT_EXCITED;
         const Md meat = sf2 * gf.topLeftCorner(n, n) + st2 * gt.topLeftCorner(n, n);
-        cov = hi * meat * hi;
+        cov = hi * meat * hi + offset_share(in, t, hi);
     }
     if (!cov.allFinite()) return LOADID_E_NOT_EXCITED;
     for (int i = 0; i < n; ++i) std[i] = static_cast<Real>(std::sqrt(std::max(cov(i, i), 0.0)));

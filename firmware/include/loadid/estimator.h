@@ -99,6 +99,12 @@ typedef struct {
      * look excited. n_params + 1 entries (the last, the wrench column's,
      * is ignored). Default 1. */
     loadid_real_t col_exact[LOADID_MAX_PARAMS + 1];
+    /* n_params 10: the covariance of the error of the zeroing offset y0
+     * subtracted from every wrench (eq. 7), 6 x 6 row-major [N^2, N Nm,
+     * Nm^2]: the noise of the zeroing window's mean. One error shared by
+     * every row, so no residual shows it; loadid_est_uncertainty adds its
+     * share. Default 0 (the offset exact); ignored for 16. */
+    loadid_real_t offset_cov[LOADID_NROWS * LOADID_NROWS];
 } loadid_est_config_t;
 
 /* What estimate() reports beside phi. */
@@ -163,6 +169,12 @@ int loadid_est_set_weights(loadid_est_t *est, const loadid_real_t row_sigma[6],
  * value not finite and > 0: nothing changed). */
 int loadid_est_set_exact(loadid_est_t *est, const loadid_real_t *col_exact);
 
+/* New offset_cov (see loadid_est_config_t; 36 values, symmetric, with a
+ * non-negative diagonal), kept through resets; no reset. The pipeline sets
+ * it when a zeroing ends. Returns 0 or -EINVAL (NULL, or a value not
+ * finite, a negative variance or an asymmetric matrix: nothing changed). */
+int loadid_est_set_offset_cov(loadid_est_t *est, const loadid_real_t cov[36]);
+
 /* Multiplies the noise level of the force rows (row_sigma[0..2]) by force,
  * of the torque rows by torque, and the regressor columns' weights
  * (col_weight[0..n-1]) by columns, for the samples already taken as well,
@@ -214,7 +226,8 @@ int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi, loadid_est_
  * estimate (as loadid_est_estimate gave it), from its covariance on the
  * weighted data: RLS and LS_BATCH s^2 (A^T W A)^-1 (Sigma of eq. 17); RIV
  * s^2 M^-1 (C^T W C) M^-T (eqs. 20-22); RTLS, TLS_BATCH and REFINED the
- * first-order covariance of the TLS solution. W = D^2 (row weights); the
+ * first-order covariance of the TLS solution, plus what the zeroing
+ * offset's error (offset_cov) adds. W = D^2 (row weights); the
  * scale s is measured a posteriori from the weighted residual (1 when the
  * configured noise levels match the data) and returned in *scale (may be
  * NULL). std: n_params values.

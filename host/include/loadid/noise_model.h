@@ -91,6 +91,17 @@ void loadid_noise_acc_moving(loadid_noise_acc_t *a, int64_t t_us, int64_t period
 int loadid_noise_acc_sigma(loadid_noise_acc_t *a, int min_still,
                            double sigma[LOADID_NOISE_CHANNELS]);
 
+/* The covariance of the zeroing offset y0 (the wrench channels' mean over
+ * n_mean still samples; 6 x 6 row-major, N^2, N Nm, Nm^2) from the still
+ * window: the channels' sample covariance over n_mean, each channel's
+ * share widened by its long-run factor sqrt((1 + r) / (1 - r)), r its
+ * lag-1 autocorrelation in [-0.5, 0.95] (an AR(1) noise: a sensor's low-pass
+ * filter makes successive samples alike, and their mean then varies more
+ * than sigma^2 / n). rho (may be NULL): the six r. Returns 0, or -EAGAIN
+ * with fewer than 2 still samples or n_mean < 1 (cov zero). */
+int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double cov[36],
+                            double rho[6]);
+
 /* The joint-derived levels at one pose: omega from the filter's qd error,
  * alpha and a - g from its qdd error through the kinematics (kin at q).
  * sigma_qd, sigma_qdd: loadid_jf_steady_sigma's [1] and [2]. Returns 0 or

@@ -1,6 +1,7 @@
 /* The measured noise model (noise_model.h). */
 #include "loadid/noise_model.h"
 
+#include <errno.h>
 #include <math.h>
 #include <string.h>
 
@@ -94,6 +95,33 @@ int loadid_noise_acc_sigma(loadid_noise_acc_t *a, int min_still,
     }
     memset(sigma, 0, LOADID_NOISE_CHANNELS * sizeof sigma[0]);
     return LOADID_NOISE_FALLBACK;
+}
+
+int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double cov[36],
+                            double rho[6]) {
+    memset(cov, 0, 36 * sizeof cov[0]);
+    if (rho) memset(rho, 0, 6 * sizeof rho[0]);
+    const int n = a->still_n;
+    if (n < 2 || n_mean < 1) return -EAGAIN;
+    double mean[6] = {0}, c[6][6] = {{0}}, lag[6] = {0}, f[6];
+    for (int k = 0; k < n; ++k)
+        for (int i = 0; i < 6; ++i) mean[i] += a->still[k][i] / n;
+    for (int k = 0; k < n; ++k)
+        for (int i = 0; i < 6; ++i) {
+            const double di = a->still[k][i] - mean[i];
+            for (int j = 0; j < 6; ++j) c[i][j] += di * (a->still[k][j] - mean[j]);
+            if (k > 0) lag[i] += di * (a->still[k - 1][i] - mean[i]);
+        }
+    for (int i = 0; i < 6; ++i) {
+        double r = c[i][i] > 0 ? lag[i] / c[i][i] : 0.0;
+        r = r < -0.5 ? -0.5 : r > 0.95 ? 0.95 : r;
+        if (rho) rho[i] = r;
+        f[i] = sqrt((1 + r) / (1 - r));
+    }
+    for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 6; ++j)
+            cov[6 * i + j] = f[i] * f[j] * c[i][j] / (n - 1) / (double)n_mean;
+    return 0;
 }
 
 int loadid_noise_joint_levels(const loadid_kin_t *kin, const loadid_real_t *q, double sigma_qd,

@@ -545,6 +545,22 @@ static void finish_estimation(loadid_pipeline_t *p, int64_t utime, int by_stop) 
 
 /* ------------------------------------------------------------- zeroing */
 
+/* y0's error is shared by every row of the estimation: each estimator's
+ * phi_std takes it in (loadid_est_config_t's offset_cov). */
+static void set_offset_cov(loadid_pipeline_t *p) {
+    double cov[36], rho[6];
+    if (loadid_noise_offset_cov(&p->noise, p->zero_n, cov, rho) != 0) return;
+    loadid_real_t c[36];
+    for (int i = 0; i < 36; ++i) c[i] = (loadid_real_t)cov[i];
+    for (int m = 0; m < p->num_methods; ++m) loadid_est_set_offset_cov(p->est[m], c);
+    note(p,
+         "zeroing: offset from %lld samples, its error %.3g %.3g %.3g N, %.3g %.3g %.3g N m "
+         "(lag-1 correlation up to %.2f)",
+         (long long)p->zero_n, sqrt(cov[0]), sqrt(cov[7]), sqrt(cov[14]), sqrt(cov[21]),
+         sqrt(cov[28]), sqrt(cov[35]),
+         fmax(fmax(fmax(rho[0], rho[1]), fmax(rho[2], rho[3])), fmax(rho[4], rho[5])));
+}
+
 static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
     if (p->zero_n < MIN_ZEROING_SAMPLES) {
         char why[160];
@@ -562,6 +578,7 @@ static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
     for (int i = 0; i < 3; ++i)
         p->g_init[i] = (loadid_real_t)(p->zero_g_sum[i] / (double)p->zero_g_n);
     p->zeroed = 1;
+    if (p->n_params == LOADID_NPHI) set_offset_cov(p);
     set_state(p, utime, LOADID_STATE_IDLE, "");
 }
 
