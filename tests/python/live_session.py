@@ -18,14 +18,17 @@ LOADID_SESSION_STALL=T0:T1[,T2:T3...] (recording utimes): the joint states
 stamped in those spans are not published (the joint stream stalls and
 resumes), the daemon runs with --verbose, and the session ends when the
 recording reaches LOADID_SESSION_UNTIL (a recording utime, if given),
-without the CLI's calls. "shift" in the JSON is the daemon's clock less
-the recording's.
+without the CLI's calls. LOADID_SESSION_FREEZE=T0:T1 (recording utimes):
+the daemon is stopped (SIGSTOP) from T0 to T1 while the streams go on, as
+a loop the kernel did not run for that long; --verbose as with a stall.
+"shift" in the JSON is the daemon's clock less the recording's.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -58,10 +61,12 @@ def main():
     stalls = [tuple(int(x) for x in span.split(":"))
               for span in os.environ.get("LOADID_SESSION_STALL", "").split(",") if span]
     until = int(os.environ.get("LOADID_SESSION_UNTIL", "0")) or None
+    freeze = [int(x) for x in os.environ.get("LOADID_SESSION_FREEZE", "").split(":") if x]
+    frozen = False
     epoch = int(time.time() * 1e6) + 1_500_000
     daemon = subprocess.Popen([loadidd, "--config", config, "--can-file", f"{rec}/can.log",
                                "--can-file-epoch", str(epoch), "--publish-every", "100",
-                               *(["--verbose"] if stalls else [])],
+                               *(["--verbose"] if stalls or freeze else [])],
                               stderr=subprocess.PIPE, text=True, env=env)
     flood = {"sent": 0, "stop": threading.Event()}
 
@@ -106,6 +111,12 @@ def main():
         if until and t >= until:
             break
         pump((t + shift) / 1e6)
+        if freeze and not frozen and freeze[0] <= t < freeze[1]:
+            daemon.send_signal(signal.SIGSTOP)
+            frozen = True
+        elif frozen and t >= freeze[1]:
+            daemon.send_signal(signal.SIGCONT)
+            frozen, freeze = False, []
         if channel == "LOADID_JOINTS" and any(t0 <= t < t1 for t0, t1 in stalls):
             continue  # the stream stalls
         if channel == "LOADID_JOINTS":

@@ -80,6 +80,25 @@ int loadid_lcm_link_read(loadid_lcm_link_t *l) {
            l->on_message(l->ctx, channel, data, len, source);
 }
 
+int loadid_lcm_link_drain(loadid_lcm_link_t *l, int max) {
+    int n = 0;
+    if (!l->udpm) {
+        while (n < max && lcm_handle_timeout(l->lcm, 0) > 0) n++;
+        return n;
+    }
+    for (; n < max; ++n) {
+        uint32_t source = 0;
+        const int len = loadid_lcm_udpm_read_from(l->rx_fd, rx_buf, sizeof rx_buf, &source);
+        if (len == 0) break; /* nothing queued */
+        const char *channel;
+        const uint8_t *data;
+        size_t size;
+        if (len > 0 && loadid_lcm_udpm_parse(rx_buf, (size_t)len, &channel, &data, &size) == 0)
+            l->on_message(l->ctx, channel, data, size, source);
+    }
+    return n;
+}
+
 void loadid_lcm_link_publish(loadid_lcm_link_t *l, const char *channel, const uint8_t *buf, int n) {
     if (n <= 0)
         loadidd_log("%s: cannot encode: %s", channel, loadid_lcm_strerror(n));

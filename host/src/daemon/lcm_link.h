@@ -51,6 +51,12 @@ int loadid_lcm_link_fd(const loadid_lcm_link_t *l);
  * (always on liblcm, which does not say). */
 int loadid_lcm_link_read(loadid_lcm_link_t *l);
 
+/* Reads every message already queued, at most max, without waiting: the
+ * loop calls it before the clock's work, so that what arrived while the
+ * loop did not run (a stall, a long handler) is handled before the clock
+ * decides anything stopped coming. Returns how many were read. */
+int loadid_lcm_link_drain(loadid_lcm_link_t *l, int max);
+
 /* Sends n encoded bytes (what an encoder returned; n <= 0 is an encoder's
  * failure, a bug: logged). */
 void loadid_lcm_link_publish(loadid_lcm_link_t *l, const char *channel, const uint8_t *buf, int n);

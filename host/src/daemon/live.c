@@ -56,6 +56,10 @@
 #include "results.h"
 #include "status.h"
 
+/* At most this many queued LCM messages are read before a tick (a second
+ * of joint states at 1 kHz): a flood cannot hold the clock up for ever. */
+#define LCM_DRAIN_MAX 1000
+
 /* The loop's LCM buffer: one message out at a time. */
 _Static_assert(LOADID_LCM_OUT_MAX >= LOADID_LCM_STATUS_SIZE, "status_t fits the buffer");
 static uint8_t tx_buf[LOADID_LCM_OUT_MAX];
@@ -337,11 +341,19 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     timed = loadid_lcm_link_read(&L.lcm);
                     break;
                 case TAG_INPUT:
+                    /* The joint states that came with them first: a sample
+                     * ends a joint piece by its own time (pipeline.h). */
+                    loadid_lcm_link_drain(&L.lcm, LCM_DRAIN_MAX);
                     loadid_input_read(&L.input);
                     sync_input_fd(&L, ep);
                     break;
                 case TAG_TICK:
                     if (read(tick_fd, &v, sizeof v) < 0) break;
+                    /* What waited while the loop did not run goes in
+                     * first, the joint states before the samples: the
+                     * clock, or a sample by its own time, must not end a
+                     * joint piece whose next states sit in the socket. */
+                    loadid_lcm_link_drain(&L.lcm, LCM_DRAIN_MAX);
                     loadid_input_catch_up(&L.input);
                     loadid_pipeline_tick(L.pipe, loadid_wall_us());
                     loadid_notify_watchdog((int64_t)loadid_mono_us());
