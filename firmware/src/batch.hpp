@@ -130,7 +130,9 @@ class Batch final : public loadid_est {
                 nullptr,
                 excitation_.row_sum().data(),
                 excitation_.row_weight().data(),
-                N == LOADID_NPHI ? cfg.offset_cov : nullptr};
+                N == LOADID_NPHI ? cfg.offset_cov : nullptr,
+                cfg.noise_sigma,
+                cfg.noise_corr};
     }
 
   private:

@@ -182,6 +182,17 @@ extern "C" int loadid_est_set_offset_cov(loadid_est_t *est, const loadid_real_t 
     return 0;
 }
 
+extern "C" int loadid_est_set_noise_corr(loadid_est_t *est, const loadid_real_t sigma[2],
+                                         const loadid_real_t r[2]) {
+    if (!est || !sigma || !r) return -EINVAL;
+    for (int g = 0; g < 2; ++g)
+        if (!(std::isfinite(sigma[g]) && sigma[g] >= 0) ||
+            !(r[g] >= Real(-0.5) && r[g] <= Real(0.95)))
+            return -EINVAL;
+    for (int g = 0; g < 2; ++g) est->cfg.noise_sigma[g] = sigma[g], est->cfg.noise_corr[g] = r[g];
+    return 0;
+}
+
 extern "C" int loadid_est_rescale(loadid_est_t *est, loadid_real_t force, loadid_real_t torque,
                                   loadid_real_t columns) {
     if (!est || !positive_finite(force) || !positive_finite(torque) || !positive_finite(columns))

@@ -92,7 +92,9 @@ class RecursiveLs final : public loadid_est {
                 instrumental_ ? CC_.data() : nullptr,
                 excitation_.row_sum().data(),
                 excitation_.row_weight().data(),
-                N == LOADID_NPHI ? cfg.offset_cov : nullptr};
+                N == LOADID_NPHI ? cfg.offset_cov : nullptr,
+                cfg.noise_sigma,
+                cfg.noise_corr};
     }
 
   private:

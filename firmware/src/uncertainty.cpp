@@ -79,9 +79,19 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
     v.head(n) = phi;
     v(n) = -1;
     const double half = dof / 2;
-    const double sf2 = std::max(v.dot(gf * v), 0.0) / half;
-    const double st2 = std::max(v.dot(gt * v), 0.0) / half;
-    double s2 = (sf2 + st2) / 2;
+    double sf2 = std::max(v.dot(gf * v), 0.0) / half;
+    double st2 = std::max(v.dot(gt * v), 0.0) / half;
+    double s2 = (sf2 + st2) / 2; // the scale reported: of the residual itself
+    if (in.noise_corr && in.noise_sigma && in.row_weight) {
+        double *group[2] = {&sf2, &st2};
+        for (int k = 0; k < 2; ++k) {
+            const double r = static_cast<double>(in.noise_corr[k]);
+            const double w = static_cast<double>(in.noise_sigma[k]) *
+                             static_cast<double>(in.row_weight[3 * k]); // in units of D
+            *group[k] += w * w * ((1 + r) / (1 - r) - 1);
+        }
+    }
+    const double s2_iv = (sf2 + st2) / 2;
     Md cov(n, n);
     if (in.kind == CovKind::IV) {
         Md m(n, n), cc(n, n);
@@ -93,7 +103,7 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
         Eigen::PartialPivLU<Md> lu(m);
         const Md mi = lu.inverse();
         if (!mi.allFinite()) return LOADID_E_NOT_EXCITED;
-        cov = s2 * mi * cc * mi.transpose() + offset_share(in, t, mi);
+        cov = s2_iv * mi * cc * mi.transpose() + offset_share(in, t, mi);
     } else {
         Md h = g.topLeftCorner(n, n);
         if (in.kind == CovKind::TLS) {

@@ -17,6 +17,12 @@
 // (G_f, G_t the two row groups' A^T W A, H the whole, for TLS less the
 // noise's share): the errors of a - g, omega and alpha reach the two groups
 // differently, and one pooled s gave 83 % coverage on Izz and 98 % on m.
+// A correlated (low-pass filtered) wrench noise averages out less than
+// white: for regressors that vary slowly against the noise's correlation
+// time its share of the score's variance is its variance times the
+// long-run factor (1 + r) / (1 - r) of an AR(1) noise of lag-1 correlation
+// r; so each row group's residual variance gains that noise's variance
+// (in the weighted units) times (1 + r) / (1 - r) - 1.
 // The zeroing offset's error adds J Sigma_y0 J^T, J = H^-1 sum_k A_k^T W
 // (M^-1 for IV, with A's sum standing in for the instruments'): first order
 // in the offset error, it moved the RX60's m and m c by 1.1 to 1.6 sigma.
@@ -51,6 +57,10 @@ struct CovInput {
     const Real *row_sum = nullptr;
     const Real *row_weight = nullptr;
     const Real *offset_cov = nullptr;
+    // The wrench noise measured apart, force and torque rows (2 values
+    // each; nullptr: none): its standard deviation and lag-1 correlation.
+    const Real *noise_sigma = nullptr;
+    const Real *noise_corr = nullptr;
 };
 
 // Fills std (n values) and *scale (s). Returns 0, or LOADID_E_NOT_EXCITED

@@ -53,6 +53,8 @@ def test_config_default_lands_in_the_documented_fields(n_params):
     assert cfg.max_noise_ratio == 0.95
     np.testing.assert_array_equal(np.array(cfg.col_exact), 1.0)
     np.testing.assert_array_equal(np.array(cfg.offset_cov), 0.0)
+    np.testing.assert_array_equal(np.array(cfg.noise_sigma), 0.0)
+    np.testing.assert_array_equal(np.array(cfg.noise_corr), 0.0)
     # The estimator keeps a copy that reads back identically through ctypes.
     cfg.p0 = 123.5
     cfg.batch_capacity = 77

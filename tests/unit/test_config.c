@@ -714,8 +714,9 @@ static void wrong_lengths_and_values(void **state) {
         "2: robot.base_link: longer than 63 characters");
 }
 
-/* simulation.zero, drift, accel_bias, alpha_bias, jitter_us, trajectory_scale:
- * the real-hardware-like settings of loadid-sim (loadid/config.h). */
+/* simulation.zero, drift, accel_bias, alpha_bias, jitter_us, trajectory_scale,
+ * noise.ft_correlation: the real-hardware-like settings of loadid-sim
+ * (loadid/config.h). */
 static void assert_sim_realism_defaults(const loadid_config_t *c) {
     assert_int_equal(c->sim_zero, 1);
     assert_doubles(c->sim_drift, (const double[]){0, 0, 0, 0, 0, 0}, 6, "sim_drift");
@@ -723,6 +724,7 @@ static void assert_sim_realism_defaults(const loadid_config_t *c) {
     assert_doubles(c->sim_alpha_bias, (const double[]){0, 0, 0}, 3, "sim_alpha_bias");
     assert_int_equal(c->sim_jitter_us, 0);
     ASSERT_EQ_D(c->sim_trajectory_scale, 1.0);
+    ASSERT_EQ_D(c->sim_noise_ft_correlation, 0.0);
 }
 
 static void simulation_realism_keys(void **state) {
@@ -745,7 +747,8 @@ static void simulation_realism_keys(void **state) {
                        "  accel_bias: [0.1, -0.2, 0.3]\n"
                        "  alpha_bias: [-1, 2, -3]\n"
                        "  jitter_us: 250\n"
-                       "  trajectory_scale: 0.05\n"),
+                       "  trajectory_scale: 0.05\n"
+                       "  noise:\n    ft_correlation: 0.8\n"),
             &c, &w);
     assert_int_equal(w.count, 0);
     ASSERT_EQ_D(c.sim_still_s, 0);
@@ -755,6 +758,7 @@ static void simulation_realism_keys(void **state) {
     assert_doubles(c.sim_alpha_bias, (const double[]){-1, 2, -3}, 3, "alpha_bias");
     assert_int_equal(c.sim_jitter_us, 250);
     ASSERT_EQ_D(c.sim_trajectory_scale, 0.05);
+    ASSERT_EQ_D(c.sim_noise_ft_correlation, 0.8);
     load_ok(write_file("realism_edges.yaml",
                        "simulation:\n  zero: true\n  jitter_us: 999\n  trajectory_scale: 1\n"),
             &c, &w);
@@ -786,6 +790,10 @@ static void simulation_realism_keys(void **state) {
         "simulation:\n  seed: 3\n  trajectory_scale: 1.5\n",
         "3: simulation.trajectory_scale: a fraction of the trajectory's amplitude: must be "
         "<= 1, got 1.5");
+    expect_error("simulation:\n  noise:\n    ft_correlation: 1\n",
+                 "3: simulation.noise.ft_correlation: a lag-1 correlation: must be < 1, got 1");
+    expect_error("simulation:\n  noise:\n    ft_correlation: -0.1\n",
+                 "3: simulation.noise.ft_correlation: must be >= 0, got -0.1");
 }
 
 static void bad_names(void **state) {

@@ -51,6 +51,8 @@ typedef struct {
     FILE *values;           /* --values: what each sample encodes, in SI */
     unsigned sample_damage; /* SAMPLE_* of the CAN sample being written */
     double vib_phase[2][3];
+    double ft_state[6]; /* the F/T noise's AR(1) state (ft_noise) */
+    int ft_started;
     loadid_rng_t jitter_rng; /* simulation.jitter_us: a stream of its own */
     int64_t last_joint_us;   /* stamp of the last joint state written */
     int64_t last_can_us;     /* time of the last CAN frame written */
@@ -86,6 +88,18 @@ static int motion_at(sim_t *s, double t, loadid_servo_state_t *st, loadid_motion
     return 0;
 }
 
+/* Unit-variance noise of F/T channel i: white, or with
+ * simulation.noise.ft_correlation r an AR(1) process x_k = r x_k-1 +
+ * sqrt(1 - r^2) e_k (a first-order low-pass filter sampled at 1 kHz),
+ * started in its stationary law. r 0 leaves the draws as they were. */
+static double ft_noise(sim_t *s, int i) {
+    const double e = loadid_rng_normal(&s->rng), r = s->cfg.sim_noise_ft_correlation;
+    if (r == 0) return e;
+    s->ft_state[i] = s->ft_started ? r * s->ft_state[i] + sqrt(1 - r * r) * e : e;
+    if (i == 5) s->ft_started = 1;
+    return s->ft_state[i];
+}
+
 /* One JR3 sample at simulation time t: what the sensor measures, in SI. */
 static void measure(sim_t *s, double t, const loadid_motion_t *m, double value[4][3]) {
     double load[6], distal[6];
@@ -96,9 +110,9 @@ static void measure(sim_t *s, double t, const loadid_motion_t *m, double value[4
     for (int i = 0; i < 6; ++i) offset[i] = s->cfg.sim_offset[i] + s->cfg.sim_drift[i] * t;
     for (int i = 0; i < 3; ++i) {
         value[LOADID_JR3_FORCE][i] =
-            load[i] + distal[i] + offset[i] + s->cfg.sim_noise_force * loadid_rng_normal(&s->rng);
+            load[i] + distal[i] + offset[i] + s->cfg.sim_noise_force * ft_noise(s, i);
         value[LOADID_JR3_MOMENT][i] = load[3 + i] + distal[3 + i] + offset[3 + i] +
-                                      s->cfg.sim_noise_torque * loadid_rng_normal(&s->rng);
+                                      s->cfg.sim_noise_torque * ft_noise(s, 3 + i);
     }
     const double wt = kTwoPi * s->cfg.sim_vibration_hz * t;
     for (int i = 0; i < 3; ++i) {
@@ -252,8 +266,11 @@ static int write_truth(const sim_t *s, const char *dir, const char *traj_path,
     list(f, c->distal_phi, 10);
     fprintf(f, "\noffset: ");
     list(f, c->sim_offset, 6);
-    fprintf(f, "\nnoise:\n  force: %.17g\n  torque: %.17g\n  linear: %.17g\n  angular: %.17g\n",
-            c->sim_noise_force, c->sim_noise_torque, c->sim_noise_linear, c->sim_noise_angular);
+    fprintf(f,
+            "\nnoise:\n  force: %.17g\n  torque: %.17g\n  linear: %.17g\n  angular: %.17g\n"
+            "  ft_correlation: %.17g\n",
+            c->sim_noise_force, c->sim_noise_torque, c->sim_noise_linear, c->sim_noise_angular,
+            c->sim_noise_ft_correlation);
     fprintf(f, "vibration:\n  hz: %.17g\n  linear: %.17g\n  angular: %.17g\n", c->sim_vibration_hz,
             c->sim_vibration_linear, c->sim_vibration_angular);
     fprintf(f, "servo:\n  bandwidth_hz: %.17g\n  damping: %.17g\n  backlash: %.17g\n",

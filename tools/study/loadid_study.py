@@ -135,6 +135,9 @@ NOISE_CELLS = {
     "wrong3x": dict(sim=PAPER, vib=None,
                     est=dict(force=0.033, torque=0.00167, linear=0.167, angular=1.67)),
     "vibration": dict(sim=PAPER, vib=(1.0, 15.0), est=None),
+    # not in the default set: paper noise, the F/T noise low-pass filtered
+    # (AR(1), lag-1 correlation 0.8: a first-order filter at about 35 Hz)
+    "filtered": dict(sim=dict(PAPER, ft_correlation=0.8), vib=None, est=None),
     # not in the default set: no sensor noise, no vibration (servo, backlash
     # and encoders as default): how closely the reference finds the truth
     "clean": dict(sim=dict(force=0.0, torque=0.0, linear=0.0, angular=0.0), vib=(0.0, 0.0),
@@ -1293,7 +1296,9 @@ def main(argv=None) -> int:
                                         f"{load_phi(k)[0]:.2f} kg" for k, v in BLOCKS.items()])
         + ". Noise cells: low, paper, high (simulated F/T and accelerometer noise), wrong3x "
           "(paper noise, estimator told 1/3 of it), vibration (paper noise, vibration 1.0 m/s^2 "
-          "and 15 rad/s^2), clean (no noise, no vibration; not in the default set).")
+          "and 15 rad/s^2), filtered (paper noise, the F/T noise an AR(1) of lag-1 "
+          "correlation 0.8, as a sensor's low-pass filter makes it; not in the default set), "
+          "clean (no noise, no vibration; not in the default set).")
     ap.add_argument("--build", default=None, help="build tree with the programs (default build/release)")
     ap.add_argument("--robots", default=None, help=f"comma list of {', '.join(ROBOTS)} (default all)")
     ap.add_argument("--loads", default=None,

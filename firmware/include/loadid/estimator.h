@@ -105,6 +105,16 @@ typedef struct {
      * every row, so no residual shows it; loadid_est_uncertainty adds its
      * share. Default 0 (the offset exact); ignored for 16. */
     loadid_real_t offset_cov[LOADID_NROWS * LOADID_NROWS];
+    /* The wrench noise measured apart (the zeroing window): its standard
+     * deviation in the force and the torque rows [N, N m] (noise_sigma)
+     * and its lag-1 correlation (noise_corr, an AR(1) noise: a sensor's
+     * low-pass filter, in [-0.5, 0.95]). Correlated rows average out less
+     * than their count says: loadid_est_uncertainty adds that noise's
+     * variance times (1 + r) / (1 - r) - 1 to each row group's residual
+     * variance (the rest of the residual, the columns' noise and misfit,
+     * as it is). Default 0, 0: no correction. */
+    loadid_real_t noise_sigma[2];
+    loadid_real_t noise_corr[2];
 } loadid_est_config_t;
 
 /* What estimate() reports beside phi. */
@@ -175,6 +185,13 @@ int loadid_est_set_exact(loadid_est_t *est, const loadid_real_t *col_exact);
  * finite, a negative variance or an asymmetric matrix: nothing changed). */
 int loadid_est_set_offset_cov(loadid_est_t *est, const loadid_real_t cov[36]);
 
+/* New noise_sigma and noise_corr (see loadid_est_config_t; force,
+ * torque), kept through resets; no reset. Returns 0 or -EINVAL (NULL, a
+ * sigma not finite and >= 0, or an r outside [-0.5, 0.95]: nothing
+ * changed). */
+int loadid_est_set_noise_corr(loadid_est_t *est, const loadid_real_t sigma[2],
+                              const loadid_real_t r[2]);
+
 /* Multiplies the noise level of the force rows (row_sigma[0..2]) by force,
  * of the torque rows by torque, and the regressor columns' weights
  * (col_weight[0..n-1]) by columns, for the samples already taken as well,
@@ -226,8 +243,9 @@ int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi, loadid_est_
  * estimate (as loadid_est_estimate gave it), from its covariance on the
  * weighted data: RLS and LS_BATCH s^2 (A^T W A)^-1 (Sigma of eq. 17); RIV
  * s^2 M^-1 (C^T W C) M^-T (eqs. 20-22); RTLS, TLS_BATCH and REFINED the
- * first-order covariance of the TLS solution, plus what the zeroing
- * offset's error (offset_cov) adds. W = D^2 (row weights); the
+ * first-order covariance of the TLS solution, each row group's residual
+ * variance widened for a correlated wrench noise (noise_sigma,
+ * noise_corr), plus what the zeroing offset's error (offset_cov) adds. W = D^2 (row weights); the
  * scale s is measured a posteriori from the weighted residual (1 when the
  * configured noise levels match the data) and returned in *scale (may be
  * NULL). std: n_params values.

@@ -283,6 +283,10 @@ typedef struct {
     /* simulation.noise: the simulated sensor's noise [N, N m, m/s^2,
      * rad/s^2]; default the noise.* numbers given, else 0.1, 0.005, 0.5, 5 */
     double sim_noise_force, sim_noise_torque, sim_noise_linear, sim_noise_angular;
+    /* simulation.noise.ft_correlation: lag-1 correlation of the force and
+     * torque noise, an AR(1) process (a sensor's low-pass filter), [0, 1);
+     * default 0 (white) */
+    double sim_noise_ft_correlation;
 } loadid_config_t;
 
 /* Bits of noise_given: which levels the configuration fixes. */

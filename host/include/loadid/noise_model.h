@@ -73,6 +73,8 @@ typedef struct {
     double channel[LOADID_NOISE_CHANNELS];       /* per channel, 0 when not measured */
     int channel_source;                          /* LOADID_NOISE_STILL, _DIFFERENCES or _FALLBACK */
     double joint_spec, joint_alpha, joint_omega; /* from the joint filter; 0 if none */
+    double correlation[2];                       /* lag-1 correlation of the force and the torque
+                              noise in the zeroing window; 0 if none */
 } loadid_noise_levels_t;
 
 void loadid_noise_acc_reset(loadid_noise_acc_t *a);

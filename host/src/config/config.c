@@ -767,6 +767,11 @@ static int read_simulation(loadid_yaml_node_t *root, loadid_config_t *c) {
     TRY(read_number(n, "torque", &c->sim_noise_torque, NON_NEGATIVE));
     TRY(read_number(n, "linear", &c->sim_noise_linear, NON_NEGATIVE));
     TRY(read_number(n, "angular", &c->sim_noise_angular, NON_NEGATIVE));
+    TRY(read_number(n, "ft_correlation", &c->sim_noise_ft_correlation, NON_NEGATIVE));
+    if (!(c->sim_noise_ft_correlation < 1))
+        return loadid_yaml_fail(loadid_yaml_get(n, "ft_correlation"),
+                                "a lag-1 correlation: must be < 1, got %g",
+                                c->sim_noise_ft_correlation);
     return 0;
 fail:
     return -EINVAL;

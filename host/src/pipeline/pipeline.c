@@ -75,7 +75,8 @@ struct loadid_pipeline {
     int64_t zero_end_us;
     int64_t zero_n, zero_g_n;
     double zero_sum[6], zero_g_sum[3];
-    int zeroed; /* y0 and g_init are valid */
+    double noise_corr[2]; /* the zeroing window's (set_zeroing_noise) */
+    int zeroed;           /* y0 and g_init are valid */
     loadid_real_t y0[6], g_init[3];
     /* estimation */
     int64_t est_end_us, last_sample_us, since_publish;
@@ -492,6 +493,8 @@ static void refined_job(void *ctx) {
     loadid_pipeline_t *p = ctx;
     p->job_rc = loadid_refined_run(p->refined, &p->cfg, p->has_accel, p->job_channel, p->job_src,
                                    p->g_init, p->n_params, p->est[p->refined_m], &p->refined_rep);
+    p->refined_rep.levels.correlation[0] = p->noise_corr[0]; /* its phi_std's too */
+    p->refined_rep.levels.correlation[1] = p->noise_corr[1];
     estimate_at(p, p->refined_m, &p->job_est, 1, 0, LOADID_STATE_DONE);
 }
 
@@ -545,20 +548,34 @@ static void finish_estimation(loadid_pipeline_t *p, int64_t utime, int by_stop) 
 
 /* ------------------------------------------------------------- zeroing */
 
-/* y0's error is shared by every row of the estimation: each estimator's
- * phi_std takes it in (loadid_est_config_t's offset_cov). */
-static void set_offset_cov(loadid_pipeline_t *p) {
+/* What the zeroing window measures for each estimator's phi_std
+ * (loadid_est_config_t): y0's error, shared by every row of the
+ * estimation (offset_cov, with the zeroing term only), and how alike
+ * successive samples' noise is (noise_corr: the force and the torque
+ * channels' mean lag-1 correlation). */
+static void set_zeroing_noise(loadid_pipeline_t *p) {
     double cov[36], rho[6];
     if (loadid_noise_offset_cov(&p->noise, p->zero_n, cov, rho) != 0) return;
     loadid_real_t c[36];
     for (int i = 0; i < 36; ++i) c[i] = (loadid_real_t)cov[i];
-    for (int m = 0; m < p->num_methods; ++m) loadid_est_set_offset_cov(p->est[m], c);
+    const loadid_real_t r[2] = {(loadid_real_t)((rho[0] + rho[1] + rho[2]) / 3),
+                                (loadid_real_t)((rho[3] + rho[4] + rho[5]) / 3)};
+    /* The noise's own level: the window's spread, sqrt(n var(y0)) without
+     * the long-run factor. */
+    double var[2] = {0, 0};
+    for (int i = 0; i < 6; ++i)
+        var[i / 3] += cov[7 * i] * (double)p->zero_n * (1 - rho[i]) / (1 + rho[i]) / 3;
+    const loadid_real_t sigma[2] = {(loadid_real_t)sqrt(var[0]), (loadid_real_t)sqrt(var[1])};
+    for (int m = 0; m < p->num_methods; ++m) {
+        if (p->n_params == LOADID_NPHI) loadid_est_set_offset_cov(p->est[m], c);
+        loadid_est_set_noise_corr(p->est[m], sigma, r);
+    }
+    p->noise_corr[0] = (double)r[0], p->noise_corr[1] = (double)r[1];
     note(p,
-         "zeroing: offset from %lld samples, its error %.3g %.3g %.3g N, %.3g %.3g %.3g N m "
-         "(lag-1 correlation up to %.2f)",
+         "zeroing: offset from %lld samples, its error %.3g %.3g %.3g N, %.3g %.3g %.3g N m; "
+         "lag-1 correlation of the noise %.2f (force), %.2f (torque)",
          (long long)p->zero_n, sqrt(cov[0]), sqrt(cov[7]), sqrt(cov[14]), sqrt(cov[21]),
-         sqrt(cov[28]), sqrt(cov[35]),
-         fmax(fmax(fmax(rho[0], rho[1]), fmax(rho[2], rho[3])), fmax(rho[4], rho[5])));
+         sqrt(cov[28]), sqrt(cov[35]), (double)r[0], (double)r[1]);
 }
 
 static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
@@ -578,7 +595,7 @@ static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
     for (int i = 0; i < 3; ++i)
         p->g_init[i] = (loadid_real_t)(p->zero_g_sum[i] / (double)p->zero_g_n);
     p->zeroed = 1;
-    if (p->n_params == LOADID_NPHI) set_offset_cov(p);
+    set_zeroing_noise(p);
     set_state(p, utime, LOADID_STATE_IDLE, "");
 }
 
@@ -700,6 +717,7 @@ static void apply_measured_noise(loadid_pipeline_t *p) {
     const int jr3_spec = source == LOADID_SIGNALS_SENSOR || source == LOADID_SIGNALS_MIXED;
     const int jr3_alpha = source == LOADID_SIGNALS_SENSOR;
     loadid_noise_combine(&p->cfg, jr3_spec, jr3_alpha, channel, src, js, ja, jw, &p->levels);
+    p->levels.correlation[0] = p->noise_corr[0], p->levels.correlation[1] = p->noise_corr[1];
     for (int m = 0; m < p->num_methods; ++m) {
         if (m == p->refined_m) continue; /* weighted by its own run */
         loadid_est_config_t e = *loadid_est_config(p->est[m]);
