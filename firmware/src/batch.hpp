@@ -119,20 +119,7 @@ class Batch final : public loadid_est {
 
     CovInput information(const Real *phi) const override {
         const CovKind kind = cfg.method == LOADID_METHOD_LS_BATCH ? CovKind::LS : CovKind::TLS;
-        return {kind,
-                N,
-                excitation_.gram().data(),
-                excitation_.gram_torque().data(),
-                t_.data(),
-                samples_,
-                phi,
-                nullptr,
-                nullptr,
-                excitation_.row_sum().data(),
-                excitation_.row_weight().data(),
-                N == LOADID_NPHI ? cfg.offset_cov : nullptr,
-                cfg.noise_sigma,
-                cfg.noise_corr};
+        return cov_input<N>(kind, excitation_, t_.data(), samples_, phi, cfg);
     }
 
   private:

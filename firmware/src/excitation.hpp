@@ -17,6 +17,7 @@
 
 #include "eigen_types.hpp"
 #include "linalg.hpp"
+#include "uncertainty.hpp"
 
 namespace loadid {
 
@@ -234,6 +235,29 @@ class Excitation {
     Eigen::Matrix<Real, N1, N1> gram_torque_;
     Eigen::Matrix<Real, LOADID_NROWS, N> row_sum_;
 };
+
+// What an estimator hands uncertainty.hpp: the gate's matrices and sums
+// (t: the column weights its estimate used), its configuration's zeroing
+// and wrench-noise figures.
+template <int N>
+CovInput cov_input(CovKind kind, const Excitation<N> &ex, const Real *t, int64_t samples,
+                   const Real *phi, const loadid_est_config_t &cfg, const Real *iv_m = nullptr,
+                   const Real *iv_cc = nullptr) {
+    return {kind,
+            N,
+            ex.gram().data(),
+            ex.gram_torque().data(),
+            t,
+            samples,
+            phi,
+            iv_m,
+            iv_cc,
+            ex.row_sum().data(),
+            ex.row_weight().data(),
+            N == LOADID_NPHI ? cfg.offset_cov : nullptr,
+            cfg.noise_sigma,
+            cfg.noise_corr};
+}
 
 inline Vec6 row_weights(const loadid_est_config_t &cfg) {
     Vec6 d;

@@ -81,20 +81,11 @@ class RecursiveLs final : public loadid_est {
     }
 
     CovInput information(const Real *phi) const override {
-        return {instrumental_ ? CovKind::IV : CovKind::LS,
-                N,
-                excitation_.gram().data(),
-                excitation_.gram_torque().data(),
-                excitation_.col_weight().data(),
-                samples_,
-                phi,
-                instrumental_ ? M_.data() : nullptr,
-                instrumental_ ? CC_.data() : nullptr,
-                excitation_.row_sum().data(),
-                excitation_.row_weight().data(),
-                N == LOADID_NPHI ? cfg.offset_cov : nullptr,
-                cfg.noise_sigma,
-                cfg.noise_corr};
+        if (!instrumental_)
+            return cov_input<N>(CovKind::LS, excitation_, excitation_.col_weight().data(), samples_,
+                                phi, cfg);
+        return cov_input<N>(CovKind::IV, excitation_, excitation_.col_weight().data(), samples_,
+                            phi, cfg, M_.data(), CC_.data());
     }
 
   private:

@@ -147,20 +147,7 @@ class Rtls final : public loadid_est {
     }
 
     CovInput information(const Real *phi) const override {
-        return {CovKind::TLS,
-                N,
-                excitation_.gram().data(),
-                excitation_.gram_torque().data(),
-                t_.data(),
-                samples_,
-                phi,
-                nullptr,
-                nullptr,
-                excitation_.row_sum().data(),
-                excitation_.row_weight().data(),
-                N == LOADID_NPHI ? cfg.offset_cov : nullptr,
-                cfg.noise_sigma,
-                cfg.noise_corr};
+        return cov_input<N>(CovKind::TLS, excitation_, t_.data(), samples_, phi, cfg);
     }
 
   private:
