@@ -49,7 +49,7 @@ gravity-in-base-frame	firmware/src/kinematics.cpp	Vec3 g = f.rot.transpose() * k
 publish-every-ignored	host/src/pipeline/pipeline.c	if (p->publish_every > 0 && ++p->since_publish >= p->publish_every) {	if (p->publish_every > 0) {
 offset-share-dropped	firmware/src/uncertainty.cpp	cov = hi * meat * hi + offset_share(in, t, hi);	cov = hi * meat * hi;
 offset-cov-white	host/src/pipeline/noise_model.c	f[i] = sqrt((1 + r) / (1 - r));	f[i] = 1;
-lcm-drain-skipped	host/src/daemon/lcm_link.c	for (; n < max; ++n) {	for (; n < 0; ++n) {
+lcm-one-message-a-round	host/src/daemon/lcm_link.c	for (int n = 0; n < max; ++n) {	for (int n = 0; n < 1; ++n) {
 EOF
 )
 names=$(printf '%s\n' "$MUTANTS" | cut -f1 | uniq)

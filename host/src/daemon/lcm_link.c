@@ -66,27 +66,13 @@ int loadid_lcm_link_fd(const loadid_lcm_link_t *l) {
 
 /* udpm://: what else arrives (above all the daemon's own output, which
  * liblcm's receive thread dropped before the loop saw it) is not an input. */
-int loadid_lcm_link_read(loadid_lcm_link_t *l) {
-    if (!l->udpm) {
-        lcm_handle(l->lcm);
-        return 1;
-    }
-    uint32_t source = 0;
-    const int n = loadid_lcm_udpm_read_from(l->rx_fd, rx_buf, sizeof rx_buf, &source);
-    const char *channel;
-    const uint8_t *data;
-    size_t len;
-    return n > 0 && loadid_lcm_udpm_parse(rx_buf, (size_t)n, &channel, &data, &len) == 0 &&
-           l->on_message(l->ctx, channel, data, len, source);
-}
-
 int loadid_lcm_link_drain(loadid_lcm_link_t *l, int max) {
-    int n = 0;
+    int handled = 0;
     if (!l->udpm) {
-        while (n < max && lcm_handle_timeout(l->lcm, 0) > 0) n++;
-        return n;
+        for (int n = 0; n < max && lcm_handle_timeout(l->lcm, 0) > 0; ++n) handled++;
+        return handled;
     }
-    for (; n < max; ++n) {
+    for (int n = 0; n < max; ++n) {
         uint32_t source = 0;
         const int len = loadid_lcm_udpm_read_from(l->rx_fd, rx_buf, sizeof rx_buf, &source);
         if (len == 0) break; /* nothing queued */
@@ -94,9 +80,9 @@ int loadid_lcm_link_drain(loadid_lcm_link_t *l, int max) {
         const uint8_t *data;
         size_t size;
         if (len > 0 && loadid_lcm_udpm_parse(rx_buf, (size_t)len, &channel, &data, &size) == 0)
-            l->on_message(l->ctx, channel, data, size, source);
+            handled += l->on_message(l->ctx, channel, data, size, source) != 0;
     }
-    return n;
+    return handled;
 }
 
 void loadid_lcm_link_publish(loadid_lcm_link_t *l, const char *channel, const uint8_t *buf, int n) {

@@ -46,15 +46,10 @@ int loadid_lcm_link_open(loadid_lcm_link_t *l, const loadid_config_t *cfg,
 /* The descriptor that is readable when a message waits. */
 int loadid_lcm_link_fd(const loadid_lcm_link_t *l);
 
-/* Handles one message (one datagram on udpm://; epoll is level-triggered,
- * so the next comes with the next wait). Returns 1 when it was an input
- * (always on liblcm, which does not say). */
-int loadid_lcm_link_read(loadid_lcm_link_t *l);
-
-/* Reads every message already queued, at most max, without waiting: the
- * loop calls it before the clock's work, so that what arrived while the
- * loop did not run (a stall, a long handler) is handled before the clock
- * decides anything stopped coming. Returns how many were read. */
+/* Handles every message already queued, at most max (datagrams on
+ * udpm://), without waiting: the loop reads LCM so before anything else of
+ * an epoll round. Returns how many were inputs (on_message's say; on
+ * liblcm, which does not say, every one). */
 int loadid_lcm_link_drain(loadid_lcm_link_t *l, int max);
 
 /* Sends n encoded bytes (what an encoder returned; n <= 0 is an encoder's

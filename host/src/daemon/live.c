@@ -56,8 +56,8 @@
 #include "results.h"
 #include "status.h"
 
-/* At most this many queued LCM messages are read before a tick (a second
- * of joint states at 1 kHz): a flood cannot hold the clock up for ever. */
+/* At most this many queued LCM messages are read at once (a second of
+ * joint states at 1 kHz): a flood cannot hold the rest up for ever. */
 #define LCM_DRAIN_MAX 1000
 
 /* The loop's LCM buffer: one message out at a time. */
@@ -203,6 +203,16 @@ static int add_fd(int ep, int fd, uint32_t tag) {
 /* The input's descriptor in the epoll set: a SocketCAN input closes its
  * socket when the interface goes away (epoll forgets it) and opens another
  * when it is back. Called after every call into the input. */
+/* Everything queued on LCM (at most LCM_DRAIN_MAX): each message handled
+ * one entry of the loop times, the round's time shared out. */
+static void read_lcm_queue(live_t *L) {
+    const double t0 = loadid_mono_us();
+    const int handled = loadid_lcm_link_drain(&L->lcm, LCM_DRAIN_MAX);
+    if (handled <= 0) return;
+    const double each = (loadid_mono_us() - t0) / handled;
+    for (int k = 0; k < handled; ++k) loadid_loop_times_add(&L->times, each);
+}
+
 static void sync_input_fd(live_t *L, int ep) {
     const int fd = loadid_input_fd(&L->input);
     if (fd == L->input_fd) return;
@@ -332,28 +342,26 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
             break;
         }
         int stop = 0;
+        /* LCM first, everything queued: after a loop that did not run for
+         * a while (the kernel's, or a long handler) the joint states that
+         * came meanwhile must go in before the samples and the clock, as
+         * either ends a joint piece whose next states seem not to come (a
+         * sample by its own time, pipeline.h). */
+        for (int i = 0; i < n; ++i)
+            if (evs[i].data.u32 == TAG_LCM) read_lcm_queue(&L);
         for (int i = 0; i < n; ++i) {
             uint64_t v;
             const double t_event = loadid_mono_us();
-            int timed = evs[i].data.u32 != TAG_SIGNAL;
+            int timed = evs[i].data.u32 != TAG_SIGNAL && evs[i].data.u32 != TAG_LCM;
             switch (evs[i].data.u32) {
                 case TAG_LCM:
-                    timed = loadid_lcm_link_read(&L.lcm);
-                    break;
+                    break; /* read above */
                 case TAG_INPUT:
-                    /* The joint states that came with them first: a sample
-                     * ends a joint piece by its own time (pipeline.h). */
-                    loadid_lcm_link_drain(&L.lcm, LCM_DRAIN_MAX);
                     loadid_input_read(&L.input);
                     sync_input_fd(&L, ep);
                     break;
                 case TAG_TICK:
                     if (read(tick_fd, &v, sizeof v) < 0) break;
-                    /* What waited while the loop did not run goes in
-                     * first, the joint states before the samples: the
-                     * clock, or a sample by its own time, must not end a
-                     * joint piece whose next states sit in the socket. */
-                    loadid_lcm_link_drain(&L.lcm, LCM_DRAIN_MAX);
                     loadid_input_catch_up(&L.input);
                     loadid_pipeline_tick(L.pipe, loadid_wall_us());
                     loadid_notify_watchdog((int64_t)loadid_mono_us());
