@@ -24,6 +24,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "scratch_dir.h"
 #include "loadid/config.h"
 #include "loadid/estimator.h"
 #include "loadid/signals.h"
@@ -39,8 +40,6 @@
 /* --- Temporary files ------------------------------------------------------ */
 
 static char g_dir[256];
-static char g_created[64][512]; /* removed in reverse order at the end */
-static int g_num_created;
 
 static const char *tmp_path(const char *name) {
     static char buf[8][512];
@@ -50,13 +49,6 @@ static const char *tmp_path(const char *name) {
     return p;
 }
 
-static void remember(const char *path) {
-    for (int i = 0; i < g_num_created; ++i)
-        if (!strcmp(g_created[i], path)) return;
-    assert_true(g_num_created < 64);
-    snprintf(g_created[g_num_created++], sizeof g_created[0], "%s", path);
-}
-
 /* Writes text to name in the temporary directory; returns the full path. */
 static const char *write_file(const char *name, const char *text) {
     const char *path = tmp_path(name);
@@ -64,27 +56,23 @@ static const char *write_file(const char *name, const char *text) {
     assert_non_null(f);
     assert_int_equal(fwrite(text, 1, strlen(text), f), strlen(text));
     assert_int_equal(fclose(f), 0);
-    remember(path);
     return path;
 }
 
 static const char *make_dir(const char *name) {
     const char *path = tmp_path(name);
     assert_true(mkdir(path, 0700) == 0 || errno == EEXIST);
-    remember(path);
     return path;
 }
 
 static int setup_dir(void **state) {
     (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/loadid_test_config_XXXXXX");
-    return mkdtemp(g_dir) ? 0 : -1;
+    return scratch_dir_make(g_dir, sizeof g_dir, "test-config");
 }
 
 static int remove_dir(void **state) {
     (void)state;
-    for (int i = g_num_created - 1; i >= 0; --i) remove(g_created[i]);
-    return rmdir(g_dir);
+    return scratch_dir_remove(g_dir);
 }
 
 /* --- Loading with captured warnings --------------------------------------- */

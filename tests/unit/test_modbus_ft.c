@@ -38,6 +38,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "scratch_dir.h"
 #include "loadid/modbus_ft.h"
 #include "loadid/modbus_ft_server.h"
 #include "modbus_input.h"
@@ -414,8 +415,7 @@ static void check_invariant(const loadid_modbus_ft_stats_t *st) {
 
 static int setup_dir(void **state) {
     (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/loadid_test_modbus_XXXXXX"); /* mkdtemp template */
-    if (!mkdtemp(g_dir)) return -1;
+    if (scratch_dir_make(g_dir, sizeof g_dir, "test-modbus") != 0) return -1;
     snprintf(g_link, sizeof g_link, "%s/ft", g_dir);
     return 0;
 }
@@ -429,9 +429,7 @@ static int stop_sensors(void **state) {
 
 static int teardown_dir(void **state) {
     (void)state;
-    unlink(g_link);
-    rmdir(g_dir);
-    return 0;
+    return scratch_dir_remove(g_dir);
 }
 
 /* SI values over the wire, and the holding registers' full scales

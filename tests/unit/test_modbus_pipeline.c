@@ -20,6 +20,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "scratch_dir.h"
 #include "loadid/config.h"
 #include "loadid/modbus_ft.h"
 #include "loadid/pipeline.h"
@@ -35,17 +36,14 @@ static char g_file[256];
 
 static int setup_dir(void **state) {
     (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/loadid_test_modbus_cfg_XXXXXX"); /* mkdtemp template */
-    if (!mkdtemp(g_dir)) return -1;
+    if (scratch_dir_make(g_dir, sizeof g_dir, "test-modbus-cfg") != 0) return -1;
     snprintf(g_file, sizeof g_file, "%s/c.yaml", g_dir);
     return 0;
 }
 
 static int teardown_dir(void **state) {
     (void)state;
-    unlink(g_file);
-    rmdir(g_dir);
-    return 0;
+    return scratch_dir_remove(g_dir);
 }
 
 static int warnings;

@@ -29,20 +29,18 @@
 #include "loadid/estimator.h"
 #include "save_worker.h"
 #include "saved_result.h"
+#include "scratch_dir.h"
 
 static char g_dir[64];
 
 static int make_dir(void **state) {
     (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/loadid-save-XXXXXX");
-    return mkdtemp(g_dir) ? 0 : -1;
+    return scratch_dir_make(g_dir, sizeof g_dir, "save");
 }
 
 static int remove_dir(void **state) {
     (void)state;
-    char cmd[128];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", g_dir);
-    return system(cmd) == 0 ? 0 : -1;
+    return scratch_dir_remove(g_dir);
 }
 
 /* An estimate of its own for each k. */

@@ -30,20 +30,18 @@
 
 #include "loadid/estimator.h"
 #include "trace_worker.h"
+#include "scratch_dir.h"
 
 static char g_dir[64];
 
 static int make_dir(void **state) {
     (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/loadid-trace-XXXXXX");
-    return mkdtemp(g_dir) ? 0 : -1;
+    return scratch_dir_make(g_dir, sizeof g_dir, "trace");
 }
 
 static int remove_dir(void **state) {
     (void)state;
-    char cmd[128];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", g_dir);
-    return system(cmd) == 0 ? 0 : -1;
+    return scratch_dir_remove(g_dir);
 }
 
 static void row_of(int64_t utime, const char *name, loadid_pipeline_estimate_t *e) {
