@@ -24,6 +24,12 @@ row is within the bounds. The table gives per cell the median over seeds
 (never counted as infinite: "never" when half the seeds or more did not get
 there) and how many seeds never did.
 
+The coverage of phi_std (``pooled_coverage``): per robot and method, each
+parameter's share of runs with |error| <= 2 phi_std over all the robot's
+recordings, with its 95 % (Wilson) interval, marked where that interval lies
+wholly outside the 90-98 % target. Every recording draws its own noise
+(``sim_seed``), so the pooled runs are independent.
+
 Run it with the project's venv: ``tools/study/loadid-study --quick``
 (``--help`` lists the options; ``--self-test`` checks this file's own
 geometry, regressor, smoother and TLS against independent computations).
@@ -103,6 +109,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import zlib
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -774,6 +781,15 @@ def sim_config(robot, load, noise_cell) -> str:
     return text
 
 
+def sim_seed(robot, load, sim_name, seed) -> int:
+    """loadid-sim's seed for one recording: its own random stream per robot,
+    load, simulated noise and seed. With the bare seed, every load and noise
+    level of a seed drew the same noise, and their errors were 0.8-0.98
+    correlated: a robot's pooled coverage then rested on as few independent
+    draws as there were seeds."""
+    return zlib.crc32(f"{robot}/{load}/{sim_name}/{seed}".encode()) & 0x7FFFFFFF
+
+
 def sim_key(noise_cell):
     """Cells that simulate the same recording share it (paper, wrong3x)."""
     c = NOISE_CELLS[noise_cell]
@@ -811,12 +827,13 @@ def run_recording(task: dict) -> list:
         shutil.rmtree(rec)
     rec.parent.mkdir(parents=True, exist_ok=True)
     truth = load_phi(task["load"])
-    base = dict(robot=task["robot"], load=task["load"], seed=task["seed"])
+    sim_seed = task.get("sim_seed", task["seed"])
+    base = dict(robot=task["robot"], load=task["load"], seed=task["seed"], sim_seed=sim_seed)
     rows = []
     t0 = time.monotonic()
     try:
         run(build, "sim", ["--config", task["sim_config"], "--trajectory", task["trajectory"],
-                           "--out", rec, "--seed", task["seed"], "--load-name", task["load"]])
+                           "--out", rec, "--seed", sim_seed, "--load-name", task["load"]])
     except Exception as err:  # noqa: BLE001  -- reported per row
         for cell in task["cells"]:
             for m in task["methods"] + REF_METHODS:
@@ -969,11 +986,148 @@ def summarise(rows, methods):
             s["ratio_to_ref"] = {k: (s[k]["median"] / ref[k]["median"]
                                      if s[k]["median"] is not None and ref[k]["median"]
                                      else None) for k in METRICS}
+            if m not in REF_METHODS:
+                s["ratio_ci90"] = {base: {k: median_ratio_ci(rs, m, base, k) for k in METRICS}
+                                   for base in ("REF", "RLS") if base != m}
         summary.append(entry)
     order = {k: i for i, k in enumerate(ROBOTS)}, {k: i for i, k in enumerate(LOADS)}, \
         {k: i for i, k in enumerate(NOISE_CELLS)}
     summary.sort(key=lambda e: (order[0][e["robot"]], order[1][e["load"]], order[2][e["noise"]]))
     return summary
+
+
+RATIO_BOOT = 2000   # bootstrap resamples of a cell's seeds for a ratio's interval
+
+
+def median_ratio_ci(rows, method, base, metric):
+    """90 % interval of median(method's error) / median(base's error) over a
+    cell's seeds: a paired bootstrap (the seeds resampled, each seed's two
+    runs kept together, since they estimate from the same recording). Over
+    20 seeds a ratio of medians moves a lot: two cells of the same
+    statistics (paper and vibration noise, which the encoder-only
+    estimators do not see) gave mass ratios 0.89 and 1.60."""
+    a = {r["seed"]: r[metric] for r in rows if r["method"] == method and r.get("ok")}
+    b = {r["seed"]: r[metric] for r in rows if r["method"] == base and r.get("ok")}
+    seeds = sorted(set(a) & set(b))
+    if len(seeds) < 2:
+        return None
+    x, y = np.array([a[k] for k in seeds], float), np.array([b[k] for k in seeds], float)
+    rng = np.random.default_rng(len(seeds))   # the same interval for the same data
+    idx = rng.integers(0, len(seeds), (RATIO_BOOT, len(seeds)))
+    den = np.median(y[idx], axis=1)
+    ok = den > 0
+    if not ok.any():
+        return None
+    r = np.median(x[idx], axis=1)[ok] / den[ok]
+    return [float(v) for v in np.percentile(r, [5, 95])]
+
+
+# The issue's accuracy targets: (method, base, largest median ratio)
+TARGETS = [("REFINED", "REF", 1.1), ("RTLS", "REF", 1.5), ("RTLS", "RLS", 2.0),
+           ("TLS_BATCH", "RLS", 2.0), ("REFINED", "RLS", 2.0)]
+
+
+def target_checks(summary):
+    """Each accuracy target over the cells and metrics: met, over but with
+    the 90 % interval reaching below the target (20 seeds cannot tell), or
+    over beyond it."""
+    out = []
+    for method, base, limit in TARGETS:
+        t = dict(method=method, base=base, limit=limit, checked=0, over_in_noise=[], over=[])
+        for e in summary:
+            s, b = e["methods"].get(method), e["methods"].get(base)
+            if not s or not b:
+                continue
+            for k in METRICS:
+                if s[k]["median"] is None or not b[k]["median"]:
+                    continue
+                t["checked"] += 1
+                r = s[k]["median"] / b[k]["median"]
+                if r <= limit:
+                    continue
+                ci = (s.get("ratio_ci90") or {}).get(base, {}).get(k)
+                item = dict(cell=f"{e['robot']}/{e['load']}/{e['noise']}", metric=k, ratio=r,
+                            ci90=ci)
+                (t["over_in_noise"] if ci and ci[0] <= limit else t["over"]).append(item)
+        if t["checked"]:
+            out.append(t)
+    return out
+
+
+def targets_text(checks) -> str:
+    lines = ["", "accuracy targets (median error over a cell's seeds against the base's; "
+             "90 % interval by a paired bootstrap of the seeds)"]
+    for t in checks:
+        n_over = len(t["over"]) + len(t["over_in_noise"])
+        lines.append(f"  {t['method']} <= {t['limit']:g} x {t['base']}: met in "
+                     f"{t['checked'] - n_over} of {t['checked']}; over within the interval "
+                     f"{len(t['over_in_noise'])}; over beyond it {len(t['over'])}")
+        for i in t["over"] + t["over_in_noise"]:
+            ci = i["ci90"]
+            lines.append(f"    {'OVER' if i in t['over'] else 'over'} {i['cell']} {i['metric']}: "
+                         f"{i['ratio']:.2f}" + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else ""))
+    return "\n".join(lines)
+
+
+COVERAGE_BAND = (0.90, 0.98)   # the target: |error| <= 2 phi_std in 90-98 % of runs
+
+
+def wilson(hits, n, z=1.96):
+    """95 % (Wilson score) interval of a share hits / n."""
+    if n == 0:
+        return None, None
+    p = hits / n
+    c = (p + z * z / (2 * n)) / (1 + z * z / n)
+    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return max(0.0, c - h), min(1.0, c + h)
+
+
+def pooled_coverage(rows, methods, noises):
+    """Per robot and method, each parameter's phi_std coverage over every
+    recording of the run, with its 95 % interval and where it stands against
+    COVERAGE_BAND ("below", "above": the whole interval outside the band).
+    A recording that several cells estimate (paper and wrong3x) counts once,
+    by its first cell: pooled rows must be independent draws."""
+    first = {}
+    for n in noises:
+        first.setdefault(sim_key(n), n)
+    primary = set(first.values())
+    out = {}
+    for robot in dict.fromkeys(r["robot"] for r in rows):
+        for m in methods:
+            rs = [r for r in rows if r["robot"] == robot and r["method"] == m and r.get("ok")
+                  and r["noise"] in primary]
+            per = {}
+            for i, name in enumerate(PARAM_NAMES):
+                c = [r[f"cov{i}"] for r in rs if r.get(f"cov{i}", "") != ""]
+                if not c:
+                    continue
+                hits, n = int(sum(c)), len(c)
+                lo, hi = wilson(hits, n)
+                verdict = ("below" if hi < COVERAGE_BAND[0] else
+                           "above" if lo > COVERAGE_BAND[1] else "in band")
+                per[name] = dict(coverage=hits / n, n=n, ci95=[lo, hi], verdict=verdict)
+            if per:
+                out.setdefault(robot, {})[m] = per
+    return out
+
+
+def coverage_table(pooled) -> str:
+    lo, hi = (100 * b for b in COVERAGE_BAND)
+    lines = ["", f"phi_std coverage pooled per robot over its recordings (%; < or >: the 95 % "
+             f"interval wholly below {lo:g} or above {hi:g}, the target band)"]
+    for robot, ms in pooled.items():
+        n = max(p["n"] for per in ms.values() for p in per.values())
+        lines.append(f"== {robot}  ({n} recordings)")
+        lines.append(f"{'method':<10}" + "".join(f"{p:>7}" for p in PARAM_NAMES))
+        for m, per in ms.items():
+            cells = []
+            for name in PARAM_NAMES:
+                p = per.get(name)
+                mark = "" if p is None else {"below": "<", "above": ">"}.get(p["verdict"], " ")
+                cells.append(f"{'-':>7}" if p is None else f"{100 * p['coverage']:>6.1f}{mark}")
+            lines.append(f"{m:<10}" + "".join(cells))
+    return "\n".join(lines)
 
 
 def usable_summary(times) -> dict:
@@ -1031,8 +1185,8 @@ def table(summary, seeds) -> str:
     return "\n".join(lines)
 
 
-CSV_FIELDS = (["robot", "load", "noise", "seed", "method", "ok", "error", "complete", "samples",
-               "mass_pct", "com_mm", "inertia_pct", "model_mass_pct", "model_com_mm",
+CSV_FIELDS = (["robot", "load", "noise", "seed", "sim_seed", "method", "ok", "error", "complete",
+               "samples", "mass_pct", "com_mm", "inertia_pct", "model_mass_pct", "model_com_mm",
                "model_inertia_pct", "identified", "inertia_identified", "projected", "noise_scale",
                "report_consistent", "usable_s"] + [f"cov{i}" for i in range(10)]
               + [f"z{i}" for i in range(10)] + [f"phi{i}" for i in range(10)]
@@ -1417,6 +1571,7 @@ def main(argv=None) -> int:
                 for seed in range(1, seeds + 1):
                     tasks.append(dict(build=str(build), workdir=str(work), robot=robot, load=load,
                                       seed=seed, rec_name=f"{sim_name}-s{seed}",
+                                      sim_seed=sim_seed(robot, load, cells[0], seed),
                                       sim_config=str(sp),
                                       trajectory=str(trajectories[
                                           (robot, seed if a.trajectory_per_seed else None)]),
@@ -1459,9 +1614,15 @@ def main(argv=None) -> int:
                 noise_cells={k: NOISE_CELLS[k] for k in noises},
                 reference=dict(smoother=dict(degree=SMOOTH_DEGREE, half_width_s=SMOOTH_HALF_WIDTH_S),
                                zeroing_window_s=ZEROING_WINDOW_S, estimation_s=ESTIMATION_S))
-    (out_dir / "summary.json").write_text(json.dumps(dict(meta=meta, cells=summary), indent=1))
+    pooled = pooled_coverage(rows, methods, noises)
+    targets = target_checks(summary)
+    (out_dir / "summary.json").write_text(json.dumps(dict(meta=meta, cells=summary,
+                                                          coverage_pooled=pooled,
+                                                          targets=targets), indent=1))
 
     print(table(summary, seeds))
+    print(coverage_table(pooled))
+    print(targets_text(targets))
     print()
     print("mass %: |m - m_true| / m_true; COM mm: |c - c_true|; inertia %: ||I_C - I_C,true||_F / "
           "||I_C,true||_F; ratio: median / REF's median; coverage: share of |phi_i - phi_true,i| "

@@ -1,0 +1,127 @@
+"""loadid-study's phi_std coverage statistics (tools/study/loadid_study.py):
+the Wilson interval against published values and its defining equation, the
+simulator seeds (one random stream per recording, so that pooled runs are
+independent draws), and the pooled table's counting (a recording two cells
+share counts once; the verdicts against the 90-98 % band). Also the
+program's own --self-test (geometry, regressor, smoother, TLS, JR3 frames)."""
+
+from __future__ import annotations
+
+import itertools
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+STUDY = pathlib.Path(__file__).resolve().parents[2] / "tools" / "study"
+sys.path.insert(0, str(STUDY))
+import loadid_study as st  # noqa: E402
+
+
+@pytest.mark.parametrize("hits,n,lo,hi", [
+    # Wilson score intervals, 95 %, as tabulated by Newcombe (Stat. Med.
+    # 1998, 17:857, Table I: 81/263, 15/148, 0/20, 1/29).
+    (81, 263, 0.2553, 0.3662),
+    (15, 148, 0.0624, 0.1605),
+    (0, 20, 0.0, 0.1611),
+    (1, 29, 0.0061, 0.1718),
+])
+def test_wilson_interval_against_published_values(hits, n, lo, hi):
+    got = st.wilson(hits, n)
+    assert got[0] == pytest.approx(lo, abs=6e-5) and got[1] == pytest.approx(hi, abs=6e-5)
+
+
+def test_wilson_bounds_solve_the_score_equation():
+    # Each bound p solves (hits/n - p)^2 = z^2 p (1 - p) / n.
+    for hits, n in ((470, 480), (431, 480), (3, 7)):
+        for p in st.wilson(hits, n):
+            lhs = (hits / n - p) ** 2
+            rhs = 1.96 ** 2 * p * (1 - p) / n
+            assert lhs == pytest.approx(rhs, rel=1e-9, abs=1e-15)
+
+
+def test_every_recording_of_the_default_grid_has_its_own_seed():
+    grid = list(itertools.product(st.ROBOTS, st.LOADS, st.NOISE_CELLS, range(1, 101)))
+    seeds = {st.sim_seed(*g) for g in grid}
+    assert len(seeds) == len(grid)
+    assert all(0 <= s < 2 ** 31 for s in seeds)
+    assert st.sim_seed("rx60", "o1", "paper", 3) == st.sim_seed("rx60", "o1", "paper", 3)
+
+
+def _row(robot, noise, seed, covered, method="RTLS"):
+    return dict(robot=robot, load="o1", noise=noise, seed=seed, method=method, ok=True,
+                **{f"cov{i}": int(c) for i, c in enumerate(covered)})
+
+
+def test_pooled_coverage_counts_each_recording_once_and_judges_the_band():
+    rows = []
+    for seed in range(200):
+        # m always covered (above the band), mcx 170/200 (below), mcy
+        # 188/200 (94 %: in band), the rest 196/200 (98 %: in band).
+        cov = [True, seed < 170, seed < 188] + [seed < 196] * 7
+        rows.append(_row("rx60", "paper", seed, cov))
+        # wrong3x estimates paper's recordings: not new draws, never covered
+        rows.append(_row("rx60", "wrong3x", seed, [False] * 10))
+        rows.append(_row("rx60", "paper", seed, [False] * 10, method="REF"))
+    pooled = st.pooled_coverage(rows, ["RTLS"], ["paper", "wrong3x"])
+    per = pooled["rx60"]["RTLS"]
+    assert per["m"]["n"] == 200 and per["m"]["coverage"] == 1.0
+    assert per["m"]["verdict"] == "above"
+    assert per["mcx"]["coverage"] == pytest.approx(0.85) and per["mcx"]["verdict"] == "below"
+    assert per["mcy"]["verdict"] == "in band" and per["Izz"]["verdict"] == "in band"
+    lo, hi = per["mcx"]["ci95"]
+    assert lo < 0.85 < hi < 0.90
+    text = st.coverage_table(pooled)
+    assert "100.0>" in text and "85.0<" in text and "(200 recordings)" in text
+
+
+def test_self_test_passes():
+    r = subprocess.run([sys.executable, str(STUDY / "loadid_study.py"), "--self-test"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    assert "self-test: all passed" in r.stdout
+
+
+def _runs(method, errors):
+    return [dict(method=method, seed=k, ok=True, mass_pct=e) for k, e in enumerate(errors)]
+
+
+def test_ratio_interval_is_paired():
+    # Errors spread over two decades, the method's 1.02-1.04 times REF's on
+    # each seed: resampling the seeds in pairs gives a ratio near 1.03 with a
+    # narrow interval; unpaired resampling would scatter it by the spread.
+    ref = [0.01 * 1.27 ** k for k in range(20)]
+    meth = [e * (1.02 + 0.02 * (k % 2)) for k, e in enumerate(ref)]
+    lo, hi = st.median_ratio_ci(_runs("RTLS", meth) + _runs("REF", ref), "RTLS", "REF", "mass_pct")
+    assert 1.0 <= lo <= hi <= 1.05
+    exact = st.median_ratio_ci(_runs("RTLS", [2 * e for e in ref]) + _runs("REF", ref),
+                               "RTLS", "REF", "mass_pct")
+    assert exact == pytest.approx([2.0, 2.0], rel=1e-12)
+
+
+def test_ratio_interval_needs_two_paired_seeds():
+    assert st.median_ratio_ci(_runs("RTLS", [1.0]) + _runs("REF", [1.0]),
+                              "RTLS", "REF", "mass_pct") is None
+
+
+def _cell(name, refined, ref, ci):
+    med = lambda v: dict(median=v, p90=v)  # noqa: E731
+    return dict(robot="rx60", load=name, noise="paper", methods={
+        "REFINED": dict(mass_pct=med(refined), com_mm=med(1.0), inertia_pct=med(1.0),
+                        ratio_ci90={"REF": dict(mass_pct=ci)}),
+        "REF": dict(mass_pct=med(ref), com_mm=med(1.0), inertia_pct=med(1.0))})
+
+
+def test_targets_tell_noise_from_a_real_excess():
+    summary = [_cell("a", 1.3, 1.0, [0.95, 1.6]),   # over, but the interval reaches 1.1
+               _cell("b", 1.3, 1.0, [1.2, 1.4]),    # over beyond the interval
+               _cell("c", 1.05, 1.0, [0.9, 1.2])]   # met
+    (t,) = [t for t in st.target_checks(summary) if t["method"] == "REFINED"
+            and t["base"] == "REF"]
+    assert t["checked"] == 9
+    assert [i["cell"] for i in t["over_in_noise"]] == ["rx60/a/paper"]
+    assert [i["cell"] for i in t["over"]] == ["rx60/b/paper"]
+    text = st.targets_text([t])
+    assert "met in 7 of 9; over within the interval 1; over beyond it 1" in text
+    assert "OVER rx60/b/paper mass_pct: 1.30 [1.20, 1.40]" in text
