@@ -384,6 +384,15 @@ def test_bad_input_gives_one_line_and_non_zero(recording, tmp_path):
     (no_start / "lcm.log").write_bytes(b"")
     r = offline(cfg, no_start, check=False)
     assert r.returncode != 0 and "no START" in r.stderr
+    # Whole-number options: the whole text, in range, or exit 2 naming it.
+    for opt, val, says in (("--publish-every", "0", "a count in 1..1000000, not 0"),
+                           ("--publish-every", "10ms", "a count in 1..1000000, not 10ms"),
+                           ("--can-file-epoch", "abc", "microseconds since 1970 (0: now), not abc"),
+                           ("--can-file-epoch", "-5", "not -5")):
+        r = subprocess.run([program("LOADIDD_EXE"), "--config", str(cfg), opt, val],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2 and r.stderr.startswith(f"loadidd: {opt}: "), (opt, val, r.stderr)
+        assert says in r.stderr, r.stderr
 
 
 # ---------------------------------------------------------------- damage

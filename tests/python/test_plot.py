@@ -144,3 +144,5 @@ def test_plot_draws_a_trace_folder_and_refuses_what_it_cannot(plotted, recording
     assert r.returncode == 2, r.stderr
     r = loadid("status", "--out", tmp_path, check=False)
     assert r.returncode == 2 and "--out and --publish-every are for plot" in r.stderr
+    r = loadid("plot", "--publish-every", "1.5", tmp_path, check=False)
+    assert r.returncode == 2 and "--publish-every: a count in 1..1000000, not 1.5" in r.stderr

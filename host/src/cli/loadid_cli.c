@@ -34,6 +34,7 @@
 #include "lcmtypes/loadid_estimate_t.h" /* the states status_t carries */
 #include "lcmtypes/loadid_status_t.h"
 #include "cli_plot.h"
+#include "loadid/arg_number.h"
 #include "loadid/config.h"
 #include "loadid/lcm_wire.h" /* the states' names */
 
@@ -181,10 +182,10 @@ int main(int argc, char **argv) {
                 out = optarg;
                 break;
             case 'p': {
-                char *end;
-                const long v = strtol(optarg, &end, 10);
-                if (*end || end == optarg || v < 1 || v > 1000000) {
-                    fprintf(stderr, "%s: --publish-every: a count >= 1, not %s\n", prog, optarg);
+                long long v;
+                if (loadid_arg_integer(optarg, 1, 1000000, &v) != 0) {
+                    fprintf(stderr, "%s: --publish-every: a count in 1..1000000, not %s\n", prog,
+                            optarg);
                     return 2;
                 }
                 publish_every = (int)v;

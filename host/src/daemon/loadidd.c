@@ -29,11 +29,13 @@
 
 #include <errno.h>
 #include <getopt.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "loadid/arg_number.h"
 #include "loadid/config.h"
 #include "loadid/core.h"
 #include "loadid/lcm_wire.h"
@@ -303,7 +305,13 @@ int main(int argc, char **argv) {
                 can_file = optarg;
                 break;
             case 'e':
-                epoch = strtoll(optarg, NULL, 10);
+                if (loadid_arg_integer(optarg, 0, LLONG_MAX, &epoch) != 0) {
+                    fprintf(stderr,
+                            "%s: --can-file-epoch: wall time in microseconds since 1970 "
+                            "(0: now), not %s\n",
+                            prog, optarg);
+                    return 2;
+                }
                 break;
             case 'a':
                 allow_incomplete = 1;
@@ -318,10 +326,10 @@ int main(int argc, char **argv) {
                 replay_commands = 0;
                 break;
             case 'p': {
-                char *end;
-                long v = strtol(optarg, &end, 10);
-                if (*end || end == optarg || v < 1 || v > 1000000) {
-                    fprintf(stderr, "%s: --publish-every: a count >= 1, not %s\n", prog, optarg);
+                long long v;
+                if (loadid_arg_integer(optarg, 1, 1000000, &v) != 0) {
+                    fprintf(stderr, "%s: --publish-every: a count in 1..1000000, not %s\n", prog,
+                            optarg);
                     return 2;
                 }
                 publish_every = (int)v;
