@@ -661,6 +661,28 @@ def test_receive_buffer_overflow_is_counted_as_candump_does(vm):
           f"{st['samples_incomplete']}, sequence gaps {st['sequence_gaps']} (mod 256)")
 
 
+def test_frames_a_stopped_daemon_held_are_counted_late(vm):
+    """Lateness on SocketCAN runs from the kernel's receive time of the
+    frame that completes a sample: the burst's samples the stopped daemon's
+    socket held were received while it was stopped and handled after
+    SIGCONT, which came when the burst (3000 samples 400 us apart) had all
+    been sent; so each of them is late, the first by at least the burst's
+    1.2 s. The pre and post parts' samples may be late too on a slow VM."""
+    text = block(vm, "OVERFLOW")
+    pre, burst, post = (vm["samples"][p] for p in fault_session.OVERFLOW)
+    read = int(re.search(r"learnt after (\d+) frames read", text).group(1))
+    held = (read - 4 * pre) // 4  # complete samples among the burst's held frames
+    m = re.search(r"^loadidd: samples late (\d+) \(handled more than 1 ms after arrival\), "
+                  r"worst lateness (\d+) us$", text, re.M)
+    assert m, text
+    late, worst_us = int(m.group(1)), int(m.group(2))
+    assert held <= late <= held + pre + post + 1, (late, held)
+    span_us = (burst - 1) * fault_session.OVERFLOW_BURST_PERIOD_US
+    assert span_us - 1000 <= worst_us <= span_us + 5_000_000, (worst_us, span_us)
+    print(f"SocketCAN lateness: {late} samples late ({held} held by the stopped daemon's socket), "
+          f"worst {worst_us / 1e3:.1f} ms (the burst lasted {span_us / 1e3:.1f} ms)")
+
+
 @pytest.mark.parametrize("part", fault_session.PARTS)
 def test_offline_counts_the_same_parts_without_the_kernel_filter(vm, part, tmp_path):
     """The same hand-made frames through `loadidd --offline` (no socket, so

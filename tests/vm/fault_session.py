@@ -56,6 +56,7 @@ OUTAGE_S = 4
 OVERFLOW = ("pre", "burst", "post")
 OVERFLOW_PRE = 10
 OVERFLOW_BURST = 3000
+OVERFLOW_BURST_PERIOD_US = 400  # the burst's samples: 1.2 s in all
 OVERFLOW_POST = 10
 
 CONFIG = """robot:
@@ -285,7 +286,7 @@ def build(out_dir, lcm_python_dir):
     seq = good_part(OUTAGE, seq, OUTAGE_S * 1_000_000 // p, p, True)
     # The overflow: a burst of samples 0.4 ms apart (10 000 frames/s).
     seq = good_part("pre", seq, OVERFLOW_PRE, p, False)
-    seq = good_part("burst", seq, OVERFLOW_BURST, 400, False)
+    seq = good_part("burst", seq, OVERFLOW_BURST, OVERFLOW_BURST_PERIOD_US, False)
     good_part("post", seq, OVERFLOW_POST, p, False)
 
     exp = Counter()

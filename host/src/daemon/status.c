@@ -61,7 +61,7 @@ void loadid_status_summary(const loadid_pipeline_status_t *st, const loadid_inpu
         (long long)st->samples_faulty, (long long)st->sequence_gaps, (long long)st->joint_msgs_bad,
         (long long)st->samples_stale, (long long)in->errors, (long long)in->drops,
         (long long)in->error_frames, (long long)commands_refused);
-    if (in->late_measured) /* measured there (SocketCAN: not yet) */
+    if (in->late_measured) /* every backend measures it */
         loadidd_log(
             "samples late %lld (handled more than %.0f ms after arrival), worst "
             "lateness %.0f us",

@@ -40,8 +40,7 @@ typedef struct {
     int64_t errors;             /* the input failed and is reopened ("CAN errors") */
     int64_t drops;              /* frames the kernel dropped ("CAN drops") */
     int64_t error_frames;       /* CAN error frames ("error frames"; in frames_bad) */
-    int late_measured;          /* the backend knows its samples' arrival (not
-                                    SocketCAN yet) */
+    int late_measured;          /* the backend knows its samples' arrival */
     int64_t samples_late;       /* handled more than LOADID_INPUT_LATE_US after arrival */
     double late_max_us;         /* the worst lateness of any sample */
 } loadid_input_counters_t;

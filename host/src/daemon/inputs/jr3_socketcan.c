@@ -6,7 +6,9 @@
  * most a line a second; status_t has no field for them, and what they
  * cost shows there as sequence gaps and incomplete samples). An interface
  * that vanishes is logged, counted and reopened once a second; estimation
- * goes on without the samples lost. Lateness is not measured here yet.
+ * goes on without the samples lost. A sample's lateness runs from the
+ * kernel's receive time of the frame that completes it (SO_TIMESTAMP: the
+ * wall clock, so a step of the clock in between shows as lateness once).
  */
 #include <errno.h>
 #include <stdio.h>
@@ -42,6 +44,7 @@ static int open_(loadid_input_t *in, const loadid_input_options_t *opt, char *er
         return -ENOMEM;
     }
     in->state = c;
+    in->late_measured = 1;
     char why[512];
     c->fd = can_open(in->cfg, why, sizeof why);
     if (c->fd < 0) {
@@ -90,8 +93,8 @@ static void read_(loadid_input_t *in) {
         c->frames++;
         if (rc == 2)
             c->error_frames++;
-        else
-            loadid_pipeline_can_frame(in->pipe, &f);
+        else if (loadid_pipeline_can_frame(in->pipe, &f))
+            loadid_input_late(in, (double)(loadid_wall_us() - f.t_us));
     }
     if (rc < 0) {
         loadidd_log("CAN %s: %s; reopening", in->cfg->can_interface, strerror(-rc));
