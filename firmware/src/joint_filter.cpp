@@ -307,11 +307,15 @@ extern "C" int loadid_jf_create(int num_joints, const loadid_jf_config_t *cfg, l
     if (num_joints < 1 || num_joints > kMaxJoints || !valid_config(cfg)) return -EINVAL;
     loadid_jf *jf = new (std::nothrow) loadid_jf;
     if (!jf) return -ENOMEM;
-    jf->cfg = *cfg;
     jf->n = num_joints;
-    jf->last = INT64_MIN;
-    jf->ring_head = jf->ring_count = 0;
-    jf->piece = jf->piece_entries = jf->since_start = 0;
+    loadid_jf_configure(jf, cfg);
+    *out = jf;
+    return 0;
+}
+
+extern "C" int loadid_jf_configure(loadid_jf_t *jf, const loadid_jf_config_t *cfg) {
+    if (!jf || !valid_config(cfg)) return -EINVAL;
+    jf->cfg = *cfg;
     jf->settle = loadid::settle_steps(
         *cfg, double(cfg->nominal_step_us > 0 ? cfg->nominal_step_us : 1000) * 1e-6);
     if (cfg->lag_steps > 0) {
@@ -320,8 +324,7 @@ extern "C" int loadid_jf_create(int num_joints, const loadid_jf_config_t *cfg, l
         for (int i = 0; i <= cfg->lag_steps; ++i)
             for (int c = 0; c < 3; ++c) jf->gain[i][c] = Real(g[i][c]);
     }
-    *out = jf;
-    return 0;
+    return loadid_jf_reset(jf);
 }
 
 extern "C" void loadid_jf_destroy(loadid_jf_t *jf) {

@@ -3,6 +3,7 @@
 // kinematics give a - g, omega, alpha in S; the JR3 gives them directly.
 #include "loadid/signals.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -25,6 +26,16 @@ struct loadid_signals {
     double pll_t, pll_period;
     int64_t pll_last_raw;
     bool piece_ended; // loadid_signals_end_piece since the last joint state
+    // The period probe (cfg.period_probe): the joint states held until the
+    // period is known; period_us the filters' period, 0 while probing.
+    struct Held {
+        int64_t t;
+        bool has_setpoint;
+        loadid_real_t q[LOADID_MAX_JOINTS], setpoint[LOADID_MAX_JOINTS];
+    };
+    Held held[LOADID_SIGNALS_MAX_PROBE + 1];
+    int held_count;
+    int64_t period_us;
 };
 
 namespace {
@@ -161,6 +172,8 @@ extern "C" int loadid_signals_create(const loadid_chain_t *chain, const double g
     if (!chain || !gravity || !cfg || !out) return -EINVAL;
     if (!valid_source(enum_value(cfg->source)) || cfg->max_joint_age_us < 0) return -EINVAL;
     if (!(cfg->stamp_gain > 0 && cfg->stamp_gain <= 1)) return -EINVAL;
+    if (cfg->period_probe < 0 || cfg->period_probe > LOADID_SIGNALS_MAX_PROBE || cfg->lag_us < 0)
+        return -EINVAL;
     auto *s = new (std::nothrow) loadid_signals{};
     if (!s) return -ENOMEM;
     s->cfg = *cfg;
@@ -173,6 +186,7 @@ extern "C" int loadid_signals_create(const loadid_chain_t *chain, const double g
     }
     s->n = chain->num_joints;
     s->pll_last_raw = INT64_MIN;
+    s->period_us = cfg->period_probe > 0 ? 0 : cfg->measured.nominal_step_us;
     *out = s;
     return 0;
 }
@@ -187,6 +201,7 @@ extern "C" int loadid_signals_reset(loadid_signals_t *s) {
     loadid_jf_reset(s->setpoint);
     s->stats = loadid_signals_stats_t{};
     s->pll_last_raw = INT64_MIN;
+    s->held_count = 0;
     return 0;
 }
 
@@ -194,20 +209,25 @@ extern "C" int loadid_signals_num_joints(const loadid_signals_t *s) {
     return s ? s->n : -EINVAL;
 }
 
-extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int num_joints,
-                                          const loadid_real_t *position,
-                                          const loadid_real_t *setpoint) {
-    if (!s) return -EINVAL;
+namespace {
+
+// Checks a joint state as the filters would take it: 0, or the refusal.
+int check_joints(const loadid_signals *s, int64_t t_us, int num_joints,
+                 const loadid_real_t *position, const loadid_real_t *setpoint) {
+    if (num_joints != s->n || !position) return -EBADMSG;
+    if (!all_finite(position, s->n) || (setpoint && !all_finite(setpoint, s->n)))
+        return LOADID_E_NONFINITE;
+    if (t_us <= s->pll_last_raw) return LOADID_E_TIME_ORDER;
+    return 0;
+}
+
+// One joint state into the filters (its stamp regularised); counted.
+int feed(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *position,
+         const loadid_real_t *setpoint) {
     const int64_t raw = t_us;
-    int rc = 0;
     // Everything is checked before either filter changes, so a refused
     // message leaves both exactly as they were.
-    if (num_joints != s->n || !position)
-        rc = -EBADMSG;
-    else if (!all_finite(position, s->n) || (setpoint && !all_finite(setpoint, s->n)))
-        rc = LOADID_E_NONFINITE;
-    else if (t_us <= s->pll_last_raw)
-        rc = LOADID_E_TIME_ORDER;
+    int rc = check_joints(s, t_us, num_joints, position, setpoint);
     // The regularised stamp; a loop that has not locked yet may not go
     // backwards in time.
     if (rc == 0) t_us = regularise(s, t_us, false);
@@ -223,6 +243,86 @@ extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int
     regularise(s, raw, true);
     ++s->stats.joint_msgs_ok;
     s->piece_ended = false;
+    return 0;
+}
+
+// The filter banks for a joint stream of period p [us] (signals.h,
+// period_probe).
+void configure_for(loadid_signals *s, int64_t p) {
+    s->period_us = p;
+    s->cfg.max_joint_age_us = std::max(s->cfg.max_joint_age_us, 2 * p);
+    int lag = 0;
+    if (s->cfg.lag_us > 0)
+        lag = int(std::clamp<int64_t>(std::llround(double(s->cfg.lag_us) / double(p)), 1,
+                                      LOADID_JF_MAX_LAG));
+    for (loadid_jf_config_t *c : {&s->cfg.measured, &s->cfg.setpoint}) {
+        c->nominal_step_us = p;
+        c->lag_steps = lag;
+        c->max_step_us = std::max(c->max_step_us, s->cfg.max_joint_age_us);
+    }
+    loadid_jf_configure(s->measured, &s->cfg.measured);
+    loadid_jf_configure(s->setpoint, &s->cfg.setpoint);
+}
+
+// A joint state while probing: held; with period_probe + 1 of them the
+// period is their intervals' median, and they go into the filters.
+int probe(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *position,
+          const loadid_real_t *setpoint) {
+    int rc = check_joints(s, t_us, num_joints, position, setpoint);
+    if (rc == 0 && s->held_count > 0 && t_us <= s->held[s->held_count - 1].t)
+        rc = LOADID_E_TIME_ORDER;
+    if (rc != 0) {
+        ++s->stats.joint_msgs_bad;
+        return rc;
+    }
+    auto &h = s->held[s->held_count++];
+    h.t = t_us;
+    h.has_setpoint = setpoint != nullptr;
+    std::memcpy(h.q, position, size_t(s->n) * sizeof *position);
+    if (setpoint) std::memcpy(h.setpoint, setpoint, size_t(s->n) * sizeof *setpoint);
+    const int k = s->cfg.period_probe;
+    if (s->held_count <= k) {
+        ++s->stats.joint_msgs_ok;
+        return 0;
+    }
+    int64_t d[LOADID_SIGNALS_MAX_PROBE];
+    for (int i = 0; i < k; ++i) d[i] = s->held[i + 1].t - s->held[i].t;
+    std::sort(d, d + k);
+    const int64_t median = k % 2 ? d[k / 2] : (d[k / 2 - 1] + d[k / 2]) / 2;
+    configure_for(s, std::clamp<int64_t>(median, 50, 1000000));
+    // The held ones, counted once already but for the last.
+    const int64_t ok = s->stats.joint_msgs_ok, bad = s->stats.joint_msgs_bad;
+    for (int i = 0; i < s->held_count; ++i) {
+        const auto &e = s->held[i];
+        rc = feed(s, e.t, s->n, e.q, e.has_setpoint ? e.setpoint : nullptr);
+    }
+    s->stats.joint_msgs_ok = ok + (rc == 0);
+    s->stats.joint_msgs_bad = bad + (rc != 0);
+    s->held_count = 0;
+    return rc;
+}
+
+} // namespace
+
+extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int num_joints,
+                                          const loadid_real_t *position,
+                                          const loadid_real_t *setpoint) {
+    if (!s) return -EINVAL;
+    if (s->period_us == 0) return probe(s, t_us, num_joints, position, setpoint);
+    return feed(s, t_us, num_joints, position, setpoint);
+}
+
+extern "C" int64_t loadid_signals_joint_period_us(const loadid_signals_t *s) {
+    return s ? s->period_us : -EINVAL;
+}
+
+extern "C" double loadid_signals_stream_period_us(const loadid_signals_t *s) {
+    return s && s->pll_last_raw != INT64_MIN ? s->pll_period : 0;
+}
+
+extern "C" int loadid_signals_filter_config(const loadid_signals_t *s, loadid_jf_config_t *out) {
+    if (!s || !out) return -EINVAL;
+    *out = s->cfg.measured;
     return 0;
 }
 

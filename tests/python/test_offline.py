@@ -425,6 +425,61 @@ def joint_state_at(rec, t_us):
     return next(e for e in lcm_events(rec / "lcm.log") if e[2] == "LOADID_JOINTS" and e[1] >= t_us)
 
 
+def thin_joint_states(rec, dest, every):
+    """A copy of rec whose joint stream keeps every every-th state: a
+    controller's slower stream of the same motion (lcm.log rewritten with
+    struct, its event numbers counted again)."""
+    import struct
+    dest.mkdir()
+    for name in ("can.log", "truth.yaml"):
+        shutil.copy(rec / name, dest / name)
+    b = (rec / "lcm.log").read_bytes()
+    out, k, n = bytearray(), 0, 0
+    for off, t, channel, data_off, length in lcm_events(rec / "lcm.log"):
+        if channel == "LOADID_JOINTS":
+            k += 1
+            if (k - 1) % every:
+                continue
+        out += struct.pack(">IqqII", 0xEDA1DA01, n, t, len(channel), length)
+        out += b[off + 28:data_off + length]
+        n += 1
+    (dest / "lcm.log").write_bytes(bytes(out))
+    return dest
+
+
+@pytest.mark.parametrize("every", [4, 8])
+def test_slower_joint_streams_are_measured_not_assumed(recording, tmp_path, every):
+    """Joint states at 250 or 125 Hz (KUKA RSI, ABB EGM, a UR), where the
+    recording's run at 1 kHz: kalman.joint_period_s auto (the default)
+    measures the period from the stream, says so, and every method finds
+    the load within the default bounds, as at 1 kHz. The filters tuned for
+    1 kHz instead (joint_period_s 0.001, as the default was) took every
+    125 Hz step for a stall and estimated nothing, and on 250 Hz put RLS's
+    mass 3.4 % off with nothing said."""
+    rec = thin_joint_states(recording, tmp_path / f"joints-every-{every}", every)
+    cfg = write_config(tmp_path / "c.yaml",
+                       "estimation:\n  methods: [RTLS, RIV, RLS, REFINED]\n")
+    result, err = offline(cfg, rec, "--verbose")
+    period_ms = every * 1.0
+    lag = int(50 / period_ms + 0.5)  # llround
+    assert (f"joints: period {period_ms:.3f} ms, measured from the stream (kalman.joint_period_s "
+            f"auto); fixed-lag smoother {lag} steps ({lag * period_ms:.1f} ms)") in err, err
+    phi, _ = truth_phi(recording)
+    for r in result:
+        assert r["complete"] is True and r["samples"] == 1500, r
+        assert_close_to_truth(r, phi)
+    fixed = write_config(tmp_path / "fixed.yaml",
+                         "estimation:\n  methods: [RLS]\nkalman:\n  joint_period_s: 0.001\n")
+    r = offline(fixed, rec, "--verbose", check=False)
+    assert (f"warning: joints: the stream's period is {period_ms:.3f} ms, kalman.joint_period_s "
+            "says 1.000 ms") in r.stderr, r.stderr
+    if every == 8:
+        assert r.returncode != 0 and "no joint state near the samples" in r.stderr, r.stderr
+    else:
+        m = json.loads(r.stdout)[0]["mass"]
+        assert abs(m - phi[0]) / phi[0] > 0.02, m  # what auto avoids
+
+
 def test_damaged_lcm_log_is_read_past_and_counted(recording, tmp_path):
     """One byte of num_joints corrupted (lcm-gen's decoder overflowed the
     heap on it) and an event's length set to 0x7fffffff (liblcm's reader

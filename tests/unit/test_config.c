@@ -179,6 +179,7 @@ static void assert_defaults(const loadid_config_t *c) {
     const double sigma = 2 * 3.14159265358979323846 / 1048576.0 / sqrt(12.0);
     assert_true(fabs(c->kalman_meas_sigma - sigma) <= 1e-6 * sigma);
     ASSERT_EQ_D(c->kalman_max_joint_age_s, 0.005);
+    ASSERT_EQ_D(c->kalman_joint_period_s, 0); /* auto: measured */
     ASSERT_EQ_D(c->kalman_spec_sigma, 0.5);
     ASSERT_EQ_D(c->kalman_alpha_sigma, 1.0);
 
@@ -307,6 +308,7 @@ static const char kEveryKey[] =
     "  jerk_psd: 5000\n"
     "  meas_sigma: 1e-5\n"
     "  max_joint_age_s: 0.002\n"
+    "  joint_period_s: 0.004\n"
     "  spec_sigma: 0.25\n"
     "  alpha_sigma: 3.0\n"
     "trajectory:\n"
@@ -387,6 +389,7 @@ static void every_key_is_read(void **state) {
     ASSERT_EQ_D(c.kalman_jerk_psd, 5000);
     ASSERT_EQ_D(c.kalman_meas_sigma, 1e-5);
     ASSERT_EQ_D(c.kalman_max_joint_age_s, 0.002);
+    ASSERT_EQ_D(c.kalman_joint_period_s, 0.004);
     ASSERT_EQ_D(c.kalman_spec_sigma, 0.25);
     ASSERT_EQ_D(c.kalman_alpha_sigma, 3.0);
 
@@ -672,6 +675,10 @@ static void wrong_lengths_and_values(void **state) {
     expect_error("estimation:\n  max_missing_share: -1\n",
                  "2: estimation.max_missing_share: must be >= 0, got -1");
     expect_error("kalman:\n  meas_sigma: 0\n", "2: kalman.meas_sigma: must be > 0, got 0");
+    expect_error("kalman:\n  joint_period_s: fast\n",
+                 "2: kalman.joint_period_s: expected a period in seconds > 0 or auto");
+    expect_error("kalman:\n  joint_period_s: -0.001\n",
+                 "2: kalman.joint_period_s: must be > 0, got -0.001");
     expect_error("simulation:\n  backlash: -1e-4\n",
                  "2: simulation.backlash: must be >= 0, got -0.0001");
     expect_error("trajectory:\n  harmonics: 0\n", "2: trajectory.harmonics: must be >= 1, got 0");

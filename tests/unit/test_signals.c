@@ -348,6 +348,95 @@ static void bad_joint_messages_and_samples_change_nothing(void **state) {
     loadid_signals_destroy(s);
 }
 
+/* Joint states period_us apart from from_us until before to_us, measured
+ * positions only; returns the next stamp. */
+static int64_t push_every(loadid_signals_t *s, int64_t period_us, int64_t from_us, int64_t to_us) {
+    int64_t t = from_us;
+    for (; t < to_us; t += period_us) {
+        loadid_real_t m[3 * NJ];
+        quad_at(&kMeasured, seconds(t), m);
+        assert_int_equal(loadid_signals_push_joints(s, t, NJ, m, NULL), 0);
+    }
+    return t;
+}
+
+static loadid_signals_t *make_probing(int probe, int64_t lag_us) {
+    loadid_chain_t chain;
+    test_chain(&chain);
+    loadid_signals_config_t cfg;
+    loadid_signals_config_default(&cfg);
+    cfg.source = LOADID_SIGNALS_KF;
+    cfg.measured.jerk_psd = cfg.setpoint.jerk_psd = 10;   /* the daemon's, behind the smoother */
+    cfg.measured.lag_steps = cfg.setpoint.lag_steps = 50; /* until the probe says */
+    /* A step over the joint data's age restarts the filters (as setup.c sets it). */
+    cfg.measured.max_step_us = cfg.setpoint.max_step_us = cfg.max_joint_age_us;
+    cfg.period_probe = probe;
+    cfg.lag_us = lag_us;
+    loadid_signals_t *s = NULL;
+    assert_int_equal(loadid_signals_create(&chain, kGravity, &cfg, &s), 0);
+    return s;
+}
+
+/* A controller's joint stream at 125 Hz to 1 kHz (period_probe): the
+ * period is the median of the first intervals, the smoother's lag in
+ * steps follows from it, and every sensor sample at 1 kHz between the
+ * joint states is served with the motion's signals (quadratic motion: the
+ * filters' model holds, the reference is the kinematics of the analytic
+ * state). With the filters tuned for 1 kHz instead, a 125 Hz stream's every
+ * step is a stall and no sample is served. */
+static void joint_period_is_measured_from_the_stream(void **state) {
+    (void)state;
+    const int64_t periods[] = {1000, 2000, 4000, 8000};
+    for (size_t k = 0; k < sizeof periods / sizeof periods[0]; ++k) {
+        const int64_t p = periods[k];
+        loadid_signals_t *s = make_probing(8, 50000);
+        int64_t t = push_every(s, p, 0, 8 * p); /* 8 states: 7 intervals */
+        assert_true(loadid_signals_joint_period_us(s) == 0);
+        loadid_regressor_input_t m;
+        assert_int_equal(loadid_signals_at(s, 2 * p, NULL, NULL, NULL, &m, NULL), LOADID_E_NO_DATA);
+        t = push_every(s, p, t, t + 1); /* the 9th */
+        assert_true(loadid_signals_joint_period_us(s) == p);
+        loadid_jf_config_t c;
+        assert_int_equal(loadid_signals_filter_config(s, &c), 0);
+        assert_true(c.nominal_step_us == p);
+        assert_int_equal(c.lag_steps, (int)((50000 + p / 2) / p));
+        assert_true(c.max_step_us >= 2 * p);
+        t = push_every(s, p, t, 2000000);
+        int served = 0;
+        /* The ring keeps 401 joint states: 0.4 s at 1 kHz. */
+        for (int64_t ts = 1650000 + 300; ts < 1940000; ts += 1000, ++served) {
+            if (loadid_signals_at(s, ts, NULL, NULL, NULL, &m, NULL) != 0)
+                fail_msg("period %lld us: sample at %lld us not served", (long long)p,
+                         (long long)ts);
+            loadid_kin_state_t want = truth_at(&kMeasured, seconds(ts));
+            assert_vec(m.omega, want.omega, 1e-5, "omega on a slow joint stream");
+            assert_vec(m.alpha, want.alpha, 2e-3, "alpha on a slow joint stream");
+        }
+        loadid_signals_stats_t st;
+        loadid_signals_stats(s, &st);
+        assert_true(st.joint_msgs_ok == (2000000 + p - 1) / p && st.joint_msgs_bad == 0);
+        loadid_signals_destroy(s);
+    }
+    /* Two lost messages among the probe's: the median holds (the mean would
+     * say 5 ms). */
+    loadid_signals_t *s = make_probing(8, 50000);
+    const int64_t stamps[] = {0, 4000, 8000, 16000, 20000, 24000, 28000, 36000, 40000};
+    for (size_t i = 0; i < sizeof stamps / sizeof stamps[0]; ++i) {
+        loadid_real_t q[3 * NJ];
+        quad_at(&kMeasured, seconds(stamps[i]), q);
+        assert_int_equal(loadid_signals_push_joints(s, stamps[i], NJ, q, NULL), 0);
+    }
+    assert_true(loadid_signals_joint_period_us(s) == 4000);
+    loadid_signals_destroy(s);
+    /* The filters as configured for 1 kHz on a 125 Hz stream: nothing served. */
+    s = make_probing(0, 0);
+    assert_true(loadid_signals_joint_period_us(s) == 1000);
+    push_every(s, 8000, 0, 2000000);
+    loadid_regressor_input_t m;
+    assert_int_not_equal(loadid_signals_at(s, 1500300, NULL, NULL, NULL, &m, NULL), 0);
+    loadid_signals_destroy(s);
+}
+
 static void source_names_and_bad_configs(void **state) {
     (void)state;
     const char *names[] = {"sensor", "kf", "setpoint", "mixed"};
@@ -376,6 +465,11 @@ static void source_names_and_bad_configs(void **state) {
     loadid_signals_config_default(&cfg);
     cfg.measured.meas_sigma = 0;
     assert_int_equal(loadid_signals_create(&chain, kGravity, &cfg, &s), -EINVAL);
+    loadid_signals_config_default(&cfg);
+    cfg.period_probe = LOADID_SIGNALS_MAX_PROBE + 1;
+    assert_int_equal(loadid_signals_create(&chain, kGravity, &cfg, &s), -EINVAL);
+    cfg.period_probe = 8, cfg.lag_us = -1;
+    assert_int_equal(loadid_signals_create(&chain, kGravity, &cfg, &s), -EINVAL);
     assert_null(s);
     loadid_signals_destroy(NULL);
 }
@@ -388,6 +482,7 @@ int main(void) {
         cmocka_unit_test(lost_joint_states_keep_the_stamps),
         cmocka_unit_test(stale_and_missing_joints_are_refused_and_counted),
         cmocka_unit_test(bad_joint_messages_and_samples_change_nothing),
+        cmocka_unit_test(joint_period_is_measured_from_the_stream),
         cmocka_unit_test(source_names_and_bad_configs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -150,6 +150,7 @@ static int run(const loadid_config_t *cfg, const loadid_chain_t *chain, const ch
      * paper has them; this reader serves each sample as it comes, which the
      * fixed-lag smoother (kalman.lag_s) could not. */
     scfg.measured.lag_steps = scfg.setpoint.lag_steps = 0;
+    scfg.lag_us = 0; /* also once the joint period is measured */
     loadid_jr3_config_t jcfg;
     loadid_setup_jr3(cfg, &jcfg);
     loadid_est_config_t ecfg;

@@ -79,6 +79,13 @@ int loadid_jf_create(int num_joints, const loadid_jf_config_t *cfg, loadid_jf_t 
 
 void loadid_jf_destroy(loadid_jf_t *jf);
 
+/* A new configuration (a joint stream's period learnt after create:
+ * nominal_step_us, lag_steps, max_step_us): the steady gains and settle
+ * count derived again, every measurement forgotten. Allocates nothing.
+ * Returns 0 or -EINVAL (NULL, or a config create would refuse; jf then
+ * unchanged). */
+int loadid_jf_configure(loadid_jf_t *jf, const loadid_jf_config_t *cfg);
+
 /* Forgets every measurement. Returns 0 or -EINVAL. */
 int loadid_jf_reset(loadid_jf_t *jf);
 

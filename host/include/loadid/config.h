@@ -191,14 +191,17 @@ typedef struct {
                                            this far behind the newest joint state,
                                            on zero-lag joint signals; 0 = the
                                            causal filter; default 0.05, at most
-                                           kalman.joint_period_s * 200 */
+                                           kalman.joint_period_s * 200 (auto:
+                                           capped there) */
     double kalman_stamp_gain;      /* kalman.stamp_gain: the joint stamps'
                                            phase-locked loop (loadid/signals.h),
                                            (0, 1], 1 = stamps as they are;
                                            default 0.005 */
     double kalman_joint_period_s;  /* kalman.joint_period_s: the joint
-                                           stream's period [s], for the smoother's
-                                           steady gains; default 0.001 */
+                                           stream's period [s], for the filters'
+                                           steady gains; 0 = auto (the default):
+                                           measured from the stream's first
+                                           intervals (signals.h, period_probe) */
     /* Noise of what the filters and the kinematics derive, for the
      * estimators' weights when a - g or alpha come from the joints (the
      * kf, setpoint and mixed sources; the JR3's own are noise.linear and

@@ -112,7 +112,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->kalman_max_joint_age_s = (double)sig.max_joint_age_us / 1e6;
     cfg->kalman_lag_s = 0.05;
     cfg->kalman_stamp_gain = (double)sig.stamp_gain;
-    cfg->kalman_joint_period_s = (double)jf.nominal_step_us / 1e6;
+    cfg->kalman_joint_period_s = 0; /* auto: measured from the stream */
     cfg->rt_cpu = -1;
     cfg->kalman_spec_sigma = 0.5;
     cfg->kalman_alpha_sigma = 1.0;
@@ -434,21 +434,34 @@ fail:
     return -EINVAL;
 }
 
-/* A noise level: a number > 0 (its bit set in noise_given) or "auto". */
-static int read_level(loadid_yaml_node_t *map, const char *key, double *out, int bit,
-                      loadid_config_t *c) {
+/* A number > 0 or "auto" (what: the message's "expected ..."): 1 and *out
+ * for a number, 2 for auto (*out unchanged), 0 when absent, -EINVAL. */
+static int read_positive_or_auto(loadid_yaml_node_t *map, const char *key, double *out,
+                                 const char *what) {
     loadid_yaml_node_t *n = loadid_yaml_get(map, key);
     char word[16];
     if (!n) return 0;
-    if (loadid_yaml_kind(n) == LOADID_YAML_SCALAR && loadid_yaml_as_double(n, out) == 0) {
-        if (check_sign(n, *out, POSITIVE)) return -EINVAL;
-        c->noise_given |= bit;
-        return 1;
-    }
+    if (loadid_yaml_kind(n) == LOADID_YAML_SCALAR && loadid_yaml_as_double(n, out) == 0)
+        return check_sign(n, *out, POSITIVE) ? -EINVAL : 1;
     if (loadid_yaml_kind(n) != LOADID_YAML_SCALAR || loadid_yaml_as_string(n, word, sizeof word) ||
         strcmp(word, "auto") != 0)
-        return loadid_yaml_fail(n, "expected a number > 0 or auto");
-    return 1;
+        return loadid_yaml_fail(n, "expected %s", what);
+    return 2;
+}
+
+/* kalman.joint_period_s: a period > 0, or auto (0: measured). */
+static int read_period(loadid_yaml_node_t *map, const char *key, double *out) {
+    const int rc = read_positive_or_auto(map, key, out, "a period in seconds > 0 or auto");
+    if (rc == 2) *out = 0;
+    return rc;
+}
+
+/* A noise level: a number > 0 (its bit set in noise_given) or "auto". */
+static int read_level(loadid_yaml_node_t *map, const char *key, double *out, int bit,
+                      loadid_config_t *c) {
+    const int rc = read_positive_or_auto(map, key, out, "a number > 0 or auto");
+    if (rc == 1) c->noise_given |= bit;
+    return rc;
 }
 
 /* noise: auto, or a mapping of levels (each a number or auto). */
@@ -559,8 +572,9 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
         c->kalman_stamp_gain > 1)
         return loadid_yaml_fail(loadid_yaml_get(s, "stamp_gain"), "must be <= 1, got %g",
                                 c->kalman_stamp_gain);
-    TRY(read_number(s, "joint_period_s", &c->kalman_joint_period_s, POSITIVE));
-    if (c->kalman_lag_s > c->kalman_joint_period_s * LOADID_JF_MAX_LAG + 1e-12) {
+    TRY(read_period(s, "joint_period_s", &c->kalman_joint_period_s));
+    if (c->kalman_joint_period_s > 0 &&
+        c->kalman_lag_s > c->kalman_joint_period_s * LOADID_JF_MAX_LAG + 1e-12) {
         /* Only joint_period_s may be given (the lag its default): blame the
          * key that is there. */
         loadid_yaml_node_t *lag = loadid_yaml_get(s, "lag_s");

@@ -30,6 +30,10 @@ void loadid_setup_jr3(const loadid_config_t *cfg, loadid_jr3_config_t *jr3) {
     memcpy(jr3->full_scale[LOADID_JR3_ANGULAR], cfg->jr3_fs_angular, sizeof cfg->jr3_fs_angular);
 }
 
+/* Joint intervals whose median is the stream's period (kalman.joint_period_s
+ * auto): one lost or bunched message among 8 does not move it. */
+#define JOINT_PERIOD_PROBE 8
+
 void loadid_setup_signals(const loadid_config_t *cfg, loadid_signal_source_t source,
                           loadid_signals_config_t *out) {
     loadid_signals_config_default(out);
@@ -42,8 +46,13 @@ void loadid_setup_signals(const loadid_config_t *cfg, loadid_signal_source_t sou
      * motion are of the same instant. */
     const int64_t period = llround(cfg->kalman_joint_period_s * 1e6);
     out->measured.nominal_step_us = out->setpoint.nominal_step_us = period > 0 ? period : 1000;
-    out->measured.lag_steps = out->setpoint.lag_steps =
-        (int)llround(cfg->kalman_lag_s / cfg->kalman_joint_period_s);
+    int lag = (int)llround(cfg->kalman_lag_s * 1e6 / (double)out->measured.nominal_step_us);
+    if (period <= 0) { /* auto: these until the stream's own period is measured */
+        out->period_probe = JOINT_PERIOD_PROBE;
+        out->lag_us = llround(cfg->kalman_lag_s * 1e6);
+        if (lag > LOADID_JF_MAX_LAG) lag = LOADID_JF_MAX_LAG;
+    }
+    out->measured.lag_steps = out->setpoint.lag_steps = lag;
     /* Joint data too old to serve a sample cannot carry the filters across
      * a stall either: a step longer than max_joint_age restarts them (the
      * samples after it wait for them to settle, joint_filter.h). At least

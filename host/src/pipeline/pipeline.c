@@ -39,8 +39,10 @@ struct loadid_pipeline {
     loadid_noise_acc_t noise;
     loadid_noise_levels_t levels; /* the on-line estimators' */
     loadid_kin_t *kin;            /* the joint levels at the pose */
+    int period_noted;             /* the joint period said (once) */
     double filter_sigma[3];       /* the joint filter's (or fixed-lag smoother's)
                                          noise share of its q, qd, qdd errors */
+    int64_t filter_period_us;     /* the joint period filter_sigma is for */
     loadid_real_t last_q[LOADID_MAX_JOINTS];
     int have_q;
     int has_accel; /* the configured sensor has an accelerometer (JR3) */
@@ -125,6 +127,16 @@ static void note(loadid_pipeline_t *p, const char *fmt, ...) {
     p->sink.log(p->sink.ctx, msg);
 }
 
+/* filter_sigma for the joint filters as they run (kalman.joint_period_s
+ * auto: again once the stream's period is measured). */
+static int filter_noise(loadid_pipeline_t *p) {
+    loadid_jf_config_t c;
+    const int rc = loadid_signals_filter_config(p->sig, &c);
+    if (rc) return rc;
+    p->filter_period_us = c.nominal_step_us;
+    return loadid_jf_noise_sigma(&c, (double)c.nominal_step_us * 1e-6, p->filter_sigma);
+}
+
 static void set_state(loadid_pipeline_t *p, int64_t utime, int state, const char *reason) {
     p->state = state;
     snprintf(p->reason, sizeof p->reason, "%s", reason ? reason : "");
@@ -184,7 +196,7 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
     if (rc == 0) {
         /* The measurement noise's share of what the joints give the
          * estimators: the on-line filter's, or the fixed-lag smoother's. */
-        rc = loadid_jf_noise_sigma(&scfg.measured, cfg->kalman_joint_period_s, p->filter_sigma);
+        rc = filter_noise(p);
         what = "the joint filter's noise";
     }
     p->num_methods = cfg->num_methods;
@@ -639,6 +651,34 @@ void loadid_pipeline_finish(loadid_pipeline_t *p, int64_t now_us) {
 
 /* ------------------------------------------------------------- inputs */
 
+/* The joint period the filters run at, once: measured (auto), or a given
+ * one the stream's own (its stamps' loop, after JOINT_PERIOD_CHECK
+ * states) contradicts by more than a quarter. */
+#define JOINT_PERIOD_CHECK 20
+static void note_joint_period(loadid_pipeline_t *p) {
+    loadid_jf_config_t c;
+    loadid_signals_filter_config(p->sig, &c);
+    const double ms = (double)c.nominal_step_us / 1e3;
+    if (p->cfg.kalman_joint_period_s <= 0) {
+        p->period_noted = 1;
+        note(p,
+             "joints: period %.3f ms, measured from the stream (kalman.joint_period_s auto); "
+             "fixed-lag smoother %d steps (%.1f ms)",
+             ms, c.lag_steps, (double)c.lag_steps * ms);
+        return;
+    }
+    loadid_signals_stats_t st;
+    loadid_signals_stats(p->sig, &st);
+    if (st.joint_msgs_ok < JOINT_PERIOD_CHECK) return;
+    p->period_noted = 1;
+    const double stream = loadid_signals_stream_period_us(p->sig) / 1e3;
+    if (fabs(stream - ms) > 0.25 * ms)
+        note(p,
+             "warning: joints: the stream's period is %.3f ms, kalman.joint_period_s says %.3f ms: "
+             "the filters' gains are for the wrong step (auto measures it)",
+             stream, ms);
+}
+
 void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_joints,
                                  const double *position, const double *setpoint) {
     loadid_real_t pos[LOADID_MAX_JOINTS], set[LOADID_MAX_JOINTS];
@@ -653,9 +693,12 @@ void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_jo
     if (loadid_signals_push_joints(p->sig, utime, num_joints, pos, setpoint ? set : NULL) == 0) {
         memcpy(p->last_q, pos, (size_t)num_joints * sizeof pos[0]);
         p->have_q = 1;
-        /* REFINED keeps the joint states on the filters' (regularised) clock. */
-        if (p->refined && !refined_busy(p))
-            loadid_refined_joint(p->refined, loadid_signals_newest_joint_time(p->sig), pos);
+        const int64_t newest = loadid_signals_newest_joint_time(p->sig);
+        if (!p->period_noted && newest != INT64_MIN) note_joint_period(p);
+        /* REFINED keeps the joint states on the filters' (regularised)
+         * clock: none while the joint period is being measured. */
+        if (p->refined && !refined_busy(p) && newest != INT64_MIN)
+            loadid_refined_joint(p->refined, newest, pos);
         flush_pending(p, INT64_MIN, 1);
     }
 }
@@ -710,6 +753,8 @@ static void apply_measured_noise(loadid_pipeline_t *p) {
     double channel[LOADID_NOISE_CHANNELS];
     const int src = loadid_noise_acc_sigma(&p->noise, MIN_ZEROING_SAMPLES, channel);
     double js = 0, ja = 0, jw = 0;
+    const int64_t period = loadid_signals_joint_period_us(p->sig);
+    if (period > 0 && period != p->filter_period_us) filter_noise(p);
     if (p->have_q)
         loadid_noise_joint_levels(p->kin, p->last_q, p->filter_sigma[1], p->filter_sigma[2], &js,
                                   &ja, &jw);
