@@ -480,6 +480,56 @@ def test_slower_joint_streams_are_measured_not_assumed(recording, tmp_path, ever
         assert abs(m - phi[0]) / phi[0] > 0.02, m  # what auto avoids
 
 
+def test_a_4_khz_joint_stream_estimates_as_1_khz(recording, tmp_path, lcmtypes):
+    """Joint states at 4 kHz (the recording's 1 kHz ones interpolated by
+    Catmull-Rom cubics, in numpy): the period measured (0.25 ms, the
+    smoother's lag capped at 200 steps = 50 ms), and REFINED, whose store
+    holds 2 kHz of joint states over the window and a second, keeps every
+    one of the window's 1500 samples (before the pipeline thinned its joint
+    states, the window's first fifth had none: 1199 samples, unsaid)."""
+    import struct
+    rec = tmp_path / "joints-4khz"
+    rec.mkdir()
+    for name in ("can.log", "truth.yaml"):
+        shutil.copy(recording / name, rec / name)
+    b = (recording / "lcm.log").read_bytes()
+    events = [(t, ch, b[d:d + n]) for _, t, ch, d, n in lcm_events(recording / "lcm.log")]
+    joints = [(t, lcmtypes.joint_state_t.decode(d)) for t, ch, d in events if ch == "LOADID_JOINTS"]
+    t_log = np.array([t for t, _ in joints], float)
+    utime = np.array([m.utime for _, m in joints], float)
+    q = np.array([m.position for _, m in joints])
+    qs = np.array([m.setpoint for _, m in joints])
+    out = [(t, ch, d) for t, ch, d in events if ch != "LOADID_JOINTS"]
+    up = 4
+    for i in range(len(joints) - 1):
+        i0, i3 = max(i - 1, 0), min(i + 2, len(joints) - 1)
+        for k in range(up):
+            f = k / up
+            w = 0.5 * np.array([-f + 2 * f * f - f ** 3, 2 - 5 * f * f + 3 * f ** 3,
+                                f + 4 * f * f - 3 * f ** 3, -f * f + f ** 3])
+            m = lcmtypes.joint_state_t()
+            m.utime = int(round(utime[i] + (utime[i + 1] - utime[i]) * f))
+            m.num_joints = q.shape[1]
+            m.position = list(w @ q[[i0, i, i + 1, i3]])
+            m.setpoint = list(w @ qs[[i0, i, i + 1, i3]])
+            out.append((int(round(t_log[i] + (t_log[i + 1] - t_log[i]) * f)), "LOADID_JOINTS",
+                        m.encode()))
+    out.sort(key=lambda e: e[0])
+    with open(rec / "lcm.log", "wb") as f:
+        for n, (t, ch, d) in enumerate(out):
+            f.write(struct.pack(">IqqII", 0xEDA1DA01, n, t, len(ch), len(d)) + ch.encode() + d)
+    cfg = write_config(tmp_path / "c.yaml",
+                       "estimation:\n  methods: [RTLS, RIV, RLS, REFINED]\n")
+    result, err = offline(cfg, rec, "--verbose")
+    assert ("joints: period 0.250 ms, measured from the stream (kalman.joint_period_s auto); "
+            "fixed-lag smoother 200 steps (50.0 ms)") in err, err
+    assert "REFINED: 1500 samples on the smoothed joints" in err, err
+    phi, _ = truth_phi(recording)
+    for r in result:
+        assert r["complete"] is True and r["samples"] == 1500, r
+        assert_close_to_truth(r, phi)
+
+
 def test_damaged_lcm_log_is_read_past_and_counted(recording, tmp_path):
     """One byte of num_joints corrupted (lcm-gen's decoder overflowed the
     heap on it) and an event's length set to 0x7fffffff (liblcm's reader

@@ -3,7 +3,8 @@
  * the whole window with zero-lag joint signals and measured weights.
  *
  *   joints   every accepted joint state is kept (a ring of the last
- *            duration + 1 s); at the end each joint's measured positions
+ *            duration + 1 s at 2 kHz; the pipeline thins a faster stream
+ *            to that); at the end each joint's measured positions
  *            are smoothed by the RTS smoother of the joint filter's model
  *            (no lag), and q, qd, qdd interpolated to each sensor sample's
  *            time; forward kinematics gives omega, alpha and a - g. The
