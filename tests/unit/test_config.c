@@ -180,6 +180,7 @@ static void assert_defaults(const loadid_config_t *c) {
     assert_true(fabs(c->kalman_meas_sigma - sigma) <= 1e-6 * sigma);
     ASSERT_EQ_D(c->kalman_max_joint_age_s, 0.005);
     ASSERT_EQ_D(c->kalman_joint_period_s, 0); /* auto: measured */
+    ASSERT_EQ_D(c->kalman_joint_delay_s, 0);
     ASSERT_EQ_D(c->kalman_spec_sigma, 0.5);
     ASSERT_EQ_D(c->kalman_alpha_sigma, 1.0);
 
@@ -309,6 +310,7 @@ static const char kEveryKey[] =
     "  meas_sigma: 1e-5\n"
     "  max_joint_age_s: 0.002\n"
     "  joint_period_s: 0.004\n"
+    "  joint_delay_s: -0.003\n"
     "  spec_sigma: 0.25\n"
     "  alpha_sigma: 3.0\n"
     "trajectory:\n"
@@ -390,6 +392,7 @@ static void every_key_is_read(void **state) {
     ASSERT_EQ_D(c.kalman_meas_sigma, 1e-5);
     ASSERT_EQ_D(c.kalman_max_joint_age_s, 0.002);
     ASSERT_EQ_D(c.kalman_joint_period_s, 0.004);
+    ASSERT_EQ_D(c.kalman_joint_delay_s, -0.003);
     ASSERT_EQ_D(c.kalman_spec_sigma, 0.25);
     ASSERT_EQ_D(c.kalman_alpha_sigma, 3.0);
 
@@ -679,6 +682,8 @@ static void wrong_lengths_and_values(void **state) {
                  "2: kalman.joint_period_s: expected a period in seconds > 0 or auto");
     expect_error("kalman:\n  joint_period_s: -0.001\n",
                  "2: kalman.joint_period_s: must be > 0, got -0.001");
+    expect_error("kalman:\n  joint_delay_s: 0.5\n",
+                 "2: kalman.joint_delay_s: must be within +-0.1 s, got 0.5");
     expect_error("simulation:\n  backlash: -1e-4\n",
                  "2: simulation.backlash: must be >= 0, got -0.0001");
     expect_error("trajectory:\n  harmonics: 0\n", "2: trajectory.harmonics: must be >= 1, got 0");

@@ -193,6 +193,12 @@ typedef struct {
                                            causal filter; default 0.05, at most
                                            kalman.joint_period_s * 200 (auto:
                                            capped there) */
+    double kalman_joint_delay_s;   /* kalman.joint_delay_s: how much later the
+                                           joint states are stamped than the wrench
+                                           of the same instant (transport, clocks);
+                                           subtracted from every joint utime;
+                                           |.| <= 0.1, default 0 (REFINED fits it
+                                           and says so) */
     double kalman_stamp_gain;      /* kalman.stamp_gain: the joint stamps'
                                            phase-locked loop (loadid/signals.h),
                                            (0, 1], 1 = stamps as they are;

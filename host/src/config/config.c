@@ -568,6 +568,10 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
     TRY(read_number(s, "meas_sigma", &c->kalman_meas_sigma, POSITIVE));
     TRY(read_number(s, "max_joint_age_s", &c->kalman_max_joint_age_s, POSITIVE));
     TRY(read_number(s, "lag_s", &c->kalman_lag_s, NON_NEGATIVE));
+    if (read_number(s, "joint_delay_s", &c->kalman_joint_delay_s, ANY) == 1 &&
+        fabs(c->kalman_joint_delay_s) > 0.1)
+        return loadid_yaml_fail(loadid_yaml_get(s, "joint_delay_s"),
+                                "must be within +-0.1 s, got %g", c->kalman_joint_delay_s);
     if (read_number(s, "stamp_gain", &c->kalman_stamp_gain, POSITIVE) == 1 &&
         c->kalman_stamp_gain > 1)
         return loadid_yaml_fail(loadid_yaml_get(s, "stamp_gain"), "must be <= 1, got %g",

@@ -134,6 +134,9 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
             number(out, ref->jerk_psd);
             fputs(", \"omega_rms\": ", out);
             number(out, ref->omega_rms);
+            fputs(", \"joint_delay_s\": ", out);
+            number(out, (double)ref->joint_delay_us * 1e-6);
+            fprintf(out, ", \"joint_delay_used\": %s", ref->joint_delay_used ? "true" : "false");
             fputs(", \"levels\": ", out);
             levels(out, &ref->levels);
             fputc('}', out);

@@ -121,7 +121,7 @@ static int refined_busy(loadid_pipeline_t *p);
 
 static void note(loadid_pipeline_t *p, const char *fmt, ...) {
     if (!p->sink.log) return;
-    char msg[256];
+    char msg[512];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
@@ -523,10 +523,19 @@ static void refined_noted(loadid_pipeline_t *p) {
     note(p,
          "REFINED: %lld samples on the smoothed joints (jerk PSD %.3g; the accelerometer "
          "differs from them by %.3g m/s^2, %.3g rad/s^2 RMS); rows f %.3g N, tau %.3g N m (of "
-         "which unexplained %.3g, %.3g)",
+         "which unexplained %.3g, %.3g); joint stamps %.2f ms behind the wrench's (fitted%s)",
          (long long)p->refined_rep.samples, p->refined_rep.jerk_psd,
          p->refined_rep.sensor_spec_error, p->refined_rep.sensor_alpha_error, l->force, l->torque,
-         p->refined_rep.unexplained[0], p->refined_rep.unexplained[1]);
+         p->refined_rep.unexplained[0], p->refined_rep.unexplained[1],
+         (double)p->refined_rep.joint_delay_us / 1e3,
+         p->refined_rep.joint_delay_used ? ", used" : "");
+    if (p->refined_rep.joint_delay_used)
+        note(p,
+             "warning: joints: their stamps are %.2f ms behind the wrench's (REFINED's fit, "
+             "which used it); the on-line methods carry that as misfit: kalman.joint_delay_s: "
+             "%.4f (with what is set now) corrects them",
+             (double)p->refined_rep.joint_delay_us / 1e3,
+             p->cfg.kalman_joint_delay_s + (double)p->refined_rep.joint_delay_us * 1e-6);
 }
 
 /* REFINED at DONE: in line, or handed to the worker (its estimate is then
@@ -693,6 +702,8 @@ void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_jo
         pos[i] = (loadid_real_t)position[i];
         if (setpoint) set[i] = (loadid_real_t)setpoint[i];
     }
+    /* kalman.joint_delay_s: the joint stamps on the wrench's clock. */
+    utime -= llround(p->cfg.kalman_joint_delay_s * 1e6);
     if (loadid_signals_push_joints(p->sig, utime, num_joints, pos, setpoint ? set : NULL) == 0) {
         memcpy(p->last_q, pos, (size_t)num_joints * sizeof pos[0]);
         p->have_q = 1;
