@@ -366,7 +366,8 @@ static double delay_step(const loadid_refined_t *r, int n_params, const loadid_r
 static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t g_init[3],
                          double force_sigma, double torque_sigma, int *used_it) {
     const int count = r->count;
-    const int64_t used0 = kinematics_at(r, count, 0);
+    int64_t used0 = 0; /* the kinematics at 0 are in place (the best smoothing's) */
+    for (int i = 0; i < r->scount; ++i) used0 += r->kin_ok[i];
     const double rss0 =
         fit_residual(r, n_params, g_init, force_sigma, torque_sigma, NULL, NULL) / (double)used0;
     double d = 0;
