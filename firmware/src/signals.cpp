@@ -264,8 +264,9 @@ void configure_for(loadid_signals *s, int64_t p) {
     loadid_jf_configure(s->setpoint, &s->cfg.setpoint);
 }
 
-// A joint state while probing: held; with period_probe + 1 of them the
-// period is their intervals' median, and they go into the filters.
+// A joint state while probing: held (counted when it reaches the filters);
+// with period_probe + 1 of them the period is their intervals' median, and
+// they go into the filters.
 int probe(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *position,
           const loadid_real_t *setpoint) {
     int rc = check_joints(s, t_us, num_joints, position, setpoint);
@@ -281,25 +282,18 @@ int probe(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *
     std::memcpy(h.q, position, size_t(s->n) * sizeof *position);
     if (setpoint) std::memcpy(h.setpoint, setpoint, size_t(s->n) * sizeof *setpoint);
     const int k = s->cfg.period_probe;
-    if (s->held_count <= k) {
-        ++s->stats.joint_msgs_ok;
-        return 0;
-    }
+    if (s->held_count <= k) return 0;
     int64_t d[LOADID_SIGNALS_MAX_PROBE];
     for (int i = 0; i < k; ++i) d[i] = s->held[i + 1].t - s->held[i].t;
     std::sort(d, d + k);
     const int64_t median = k % 2 ? d[k / 2] : (d[k / 2 - 1] + d[k / 2]) / 2;
     configure_for(s, std::clamp<int64_t>(median, 50, 1000000));
-    // The held ones, counted once already but for the last.
-    const int64_t ok = s->stats.joint_msgs_ok, bad = s->stats.joint_msgs_bad;
     for (int i = 0; i < s->held_count; ++i) {
         const auto &e = s->held[i];
         rc = feed(s, e.t, s->n, e.q, e.has_setpoint ? e.setpoint : nullptr);
     }
-    s->stats.joint_msgs_ok = ok + (rc == 0);
-    s->stats.joint_msgs_bad = bad + (rc != 0);
     s->held_count = 0;
-    return rc;
+    return rc; // the last one's
 }
 
 } // namespace

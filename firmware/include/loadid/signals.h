@@ -85,7 +85,8 @@ typedef struct {
     double stamp_gain;
     /* The joint stream's period measured instead of configured: with
      * period_probe > 0 the first period_probe + 1 joint states are held
-     * (samples meanwhile get LOADID_E_NO_DATA), the median of their
+     * (samples meanwhile get LOADID_E_NO_DATA; the states are counted
+     * when they reach the filters), the median of their
      * intervals is the period P, and both filter banks are configured
      * for it before the held states go in: nominal_step_us P, lag_steps
      * lag_us / P (at most LOADID_JF_MAX_LAG), and max_joint_age_us and
