@@ -3,8 +3,8 @@
  * the whole window with zero-lag joint signals and measured weights.
  *
  *   joints   every accepted joint state is kept (a ring of the last
- *            duration + 1 s at 2 kHz; the pipeline thins a faster stream
- *            to that); at the end each joint's measured positions
+ *            duration + 1 s at 2 kHz; a faster stream is thinned to
+ *            that); at the end each joint's measured positions
  *            are smoothed by the RTS smoother of the joint filter's model
  *            (no lag), and q, qd, qdd interpolated to each sensor sample's
  *            time; forward kinematics gives omega, alpha and a - g. The
@@ -73,7 +73,8 @@ int loadid_refined_create(const loadid_config_t *cfg, const loadid_chain_t *chai
                           loadid_refined_t **out);
 void loadid_refined_destroy(loadid_refined_t *r);
 
-/* An accepted joint state (measured positions). */
+/* An accepted joint state (measured positions); one less than 0.5 ms after
+ * the last kept is left out (the ring holds 2 kHz). */
 void loadid_refined_joint(loadid_refined_t *r, int64_t t_us, const loadid_real_t *q);
 /* START: forget the window's samples. */
 void loadid_refined_start(loadid_refined_t *r);

@@ -14,7 +14,6 @@
 #include "worker.h"
 
 #define MIN_ZEROING_SAMPLES 10
-#define REFINED_JOINT_STEP_US 500 /* REFINED's joint states: at most 2 kHz (refined.h) */
 #define PENDING_MAX 512 /* samples waiting for joint data (and the fixed lag): 0.5 s at 1 kHz */
 #define NOISE_MAX_GAP_US 20000 /* third differences need consecutive samples */
 #define COMMANDS_MAX 16        /* commands waiting for the fixed lag (50 ms: a few at most) */
@@ -41,7 +40,6 @@ struct loadid_pipeline {
     loadid_noise_levels_t levels; /* the on-line estimators' */
     loadid_kin_t *kin;            /* the joint levels at the pose */
     int period_noted;             /* the joint period said (once) */
-    int64_t refined_joint_us;     /* the last joint state REFINED kept */
     double filter_sigma[3];       /* the joint filter's (or fixed-lag smoother's)
                                          noise share of its q, qd, qdd errors */
     int64_t filter_period_us;     /* the joint period filter_sigma is for */
@@ -165,7 +163,6 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
     p->n_params = cfg->offset_model_estimate ? LOADID_NPHI_OFFSET : LOADID_NPHI;
     p->primary = -1;
     p->refined_m = -1;
-    p->refined_joint_us = INT64_MIN;
     p->row_rescale[0] = p->row_rescale[1] = p->row_rescale[2] = 1;
     p->has_accel = cfg->sensor_type == LOADID_SENSOR_JR3;
     p->ft_gap_us = FT_GAP_US;
@@ -710,16 +707,9 @@ void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_jo
         const int64_t newest = loadid_signals_newest_joint_time(p->sig);
         if (!p->period_noted && newest != INT64_MIN) note_joint_period(p);
         /* REFINED keeps the joint states on the filters' (regularised)
-         * clock: none while the joint period is being measured, and at most
-         * 2 kHz of them, which its store holds over the window and a second
-         * (a faster stream's are thinned: at 4 kHz it lost a fifth of the
-         * window's samples). */
-        if (p->refined && !refined_busy(p) && newest != INT64_MIN &&
-            (p->refined_joint_us == INT64_MIN ||
-             newest - p->refined_joint_us >= REFINED_JOINT_STEP_US)) {
+         * clock: none while the joint period is being measured. */
+        if (p->refined && !refined_busy(p) && newest != INT64_MIN)
             loadid_refined_joint(p->refined, newest, pos);
-            p->refined_joint_us = newest;
-        }
         flush_pending(p, INT64_MIN, 1);
     }
 }

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #define JOINT_MARGIN_US 250000 /* joint history smoothed before the window */
+#define JOINT_STEP_US 500      /* joint states kept at least this far apart: 2 kHz */
 
 typedef struct {
     int64_t t;
@@ -101,6 +102,10 @@ void loadid_refined_destroy(loadid_refined_t *r) {
 }
 
 void loadid_refined_joint(loadid_refined_t *r, int64_t t_us, const loadid_real_t *q) {
+    /* At most 2 kHz, what the ring holds over the window and a second: a
+     * faster stream's states are thinned (at 4 kHz, kept whole, the
+     * window's first fifth had none). */
+    if (r->jcount > 0 && t_us - r->jt[(r->jhead + r->jcount - 1) % r->jcap] < JOINT_STEP_US) return;
     const int slot = (r->jhead + r->jcount) % r->jcap;
     if (r->jcount == r->jcap)
         r->jhead = (r->jhead + 1) % r->jcap; /* the oldest goes */
@@ -254,6 +259,13 @@ static int64_t kinematics_at(loadid_refined_t *r, int count, int64_t delay_us) {
     return used;
 }
 
+/* The samples whose kinematics are in kin_store. */
+static int64_t kin_count(const loadid_refined_t *r) {
+    int64_t n = 0;
+    for (int i = 0; i < r->scount; ++i) n += r->kin_ok[i];
+    return n;
+}
+
 /* The same after smoothing the joints with jf, at the samples' own times;
  * or a negative code. */
 static int64_t kinematics(loadid_refined_t *r, const loadid_jf_config_t *jf) {
@@ -366,10 +378,9 @@ static double delay_step(const loadid_refined_t *r, int n_params, const loadid_r
 static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t g_init[3],
                          double force_sigma, double torque_sigma, int *used_it) {
     const int count = r->count;
-    int64_t used0 = 0; /* the kinematics at 0 are in place (the best smoothing's) */
-    for (int i = 0; i < r->scount; ++i) used0 += r->kin_ok[i];
-    const double rss0 =
-        fit_residual(r, n_params, g_init, force_sigma, torque_sigma, NULL, NULL) / (double)used0;
+    /* The kinematics at 0 are in place (the best smoothing's). */
+    const double rss0 = fit_residual(r, n_params, g_init, force_sigma, torque_sigma, NULL, NULL) /
+                        (double)kin_count(r);
     double d = 0;
     for (int it = 0; it < 4; ++it) {
         const double step = delay_step(r, n_params, g_init, force_sigma, torque_sigma);
@@ -432,8 +443,7 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     rep->jerk_psd = best_psd;
     rep->joint_delay_us = fit_delay(r, n_params, g_init, rep->levels.force, rep->levels.torque,
                                     &rep->joint_delay_used);
-    used = 0;
-    for (int i = 0; i < r->scount; ++i) used += r->kin_ok[i];
+    used = kin_count(r);
     double smooth_sigma[3];
     loadid_jf_steady_sigma(&jf, 1e-3, 1, smooth_sigma);
 
