@@ -125,3 +125,17 @@ def test_targets_tell_noise_from_a_real_excess():
     text = st.targets_text([t])
     assert "met in 7 of 9; over within the interval 1; over beyond it 1" in text
     assert "OVER rx60/b/paper mass_pct: 1.30 [1.20, 1.40]" in text
+
+
+def test_rigid_cells_simulate_their_own_recordings_without_backlash():
+    # The rigid cells turn the gears' backlash off in loadid-sim's
+    # configuration, and so may not share the backlash cells' recordings.
+    def simulation(cell):
+        text = st.sim_config("rx60", "o1", cell)
+        return text[text.index("simulation:\n"):]
+    for cell, base in (("paper_rigid", "paper"), ("low_rigid", "low")):
+        assert "\n  backlash: 0.0\n" in simulation(cell)
+        assert "backlash" not in simulation(base)
+        assert st.sim_key(cell) != st.sim_key(base)
+        assert simulation(cell).replace("  backlash: 0.0\n", "") == simulation(base)
+    assert st.sim_key("wrong3x") == st.sim_key("paper")

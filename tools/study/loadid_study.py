@@ -149,6 +149,11 @@ NOISE_CELLS = {
     # and encoders as default): how closely the reference finds the truth
     "clean": dict(sim=dict(force=0.0, torque=0.0, linear=0.0, angular=0.0), vib=(0.0, 0.0),
                   est=None),
+    # not in the default set: low and paper noise, gears without backlash
+    # (simulation.backlash 0): phi_std's coverage where the motion model fits
+    "paper_rigid": dict(sim=PAPER, vib=None, est=None, backlash=0.0),
+    "low_rigid": dict(sim=dict(force=0.03, torque=0.0015, linear=0.15, angular=1.5), vib=None,
+                      est=None, backlash=0.0),
 }
 DEFAULT_NOISE = ["low", "paper", "high", "wrong3x", "vibration"]
 DEFAULT_METHODS = ["RTLS", "RIV", "RLS", "TLS_BATCH", "REFINED"]
@@ -777,6 +782,8 @@ def sim_config(robot, load, noise_cell) -> str:
     text += f"  load_phi: {fmt_list(load_phi(load))}\n"
     if c["vib"] is not None:
         text += f"  vibration_linear: {c['vib'][0]!r}\n  vibration_angular: {c['vib'][1]!r}\n"
+    if c.get("backlash") is not None:
+        text += f"  backlash: {c['backlash']!r}\n"
     text += "  noise:\n" + "".join(f"    {k}: {v!r}\n" for k, v in c["sim"].items())
     return text
 
@@ -793,7 +800,7 @@ def sim_seed(robot, load, sim_name, seed) -> int:
 def sim_key(noise_cell):
     """Cells that simulate the same recording share it (paper, wrong3x)."""
     c = NOISE_CELLS[noise_cell]
-    return (tuple(sorted(c["sim"].items())), c["vib"])
+    return (tuple(sorted(c["sim"].items())), c["vib"], c.get("backlash"))
 
 
 def est_config(robot, noise_cell, methods, signals=None, lag=None, jerk_psd=None) -> str:
@@ -1452,7 +1459,8 @@ def main(argv=None) -> int:
           "(paper noise, estimator told 1/3 of it), vibration (paper noise, vibration 1.0 m/s^2 "
           "and 15 rad/s^2), filtered (paper noise, the F/T noise an AR(1) of lag-1 "
           "correlation 0.8, as a sensor's low-pass filter makes it; not in the default set), "
-          "clean (no noise, no vibration; not in the default set).")
+          "clean (no noise, no vibration; not in the default set), low_rigid and paper_rigid "
+          "(low and paper noise, gears without backlash; not in the default set).")
     ap.add_argument("--build", default=None, help="build tree with the programs (default build/release)")
     ap.add_argument("--robots", default=None, help=f"comma list of {', '.join(ROBOTS)} (default all)")
     ap.add_argument("--loads", default=None,
