@@ -131,10 +131,11 @@ ROBOTS = {
 GRAVITY = np.array([0.0, 0.0, -9.81])  # robot.gravity (the default), in base_link's frame
 
 PAPER = dict(force=0.1, torque=0.005, linear=0.5, angular=5.0)
+LOW = dict(force=0.03, torque=0.0015, linear=0.15, angular=1.5)
 # simulation: noise and vibration of each noise cell; estimator: the
 # configuration's noise: section (None: left out, so measured).
 NOISE_CELLS = {
-    "low": dict(sim=dict(force=0.03, torque=0.0015, linear=0.15, angular=1.5), vib=None, est=None),
+    "low": dict(sim=LOW, vib=None, est=None),
     "paper": dict(sim=PAPER, vib=None, est=None),
     "high": dict(sim=dict(force=0.3, torque=0.015, linear=1.5, angular=15.0), vib=None, est=None),
     # paper noise simulated, the estimator told levels 3 times too small
@@ -152,8 +153,7 @@ NOISE_CELLS = {
     # not in the default set: low and paper noise, gears without backlash
     # (simulation.backlash 0): phi_std's coverage where the motion model fits
     "paper_rigid": dict(sim=PAPER, vib=None, est=None, backlash=0.0),
-    "low_rigid": dict(sim=dict(force=0.03, torque=0.0015, linear=0.15, angular=1.5), vib=None,
-                      est=None, backlash=0.0),
+    "low_rigid": dict(sim=LOW, vib=None, est=None, backlash=0.0),
 }
 DEFAULT_NOISE = ["low", "paper", "high", "wrong3x", "vibration"]
 DEFAULT_METHODS = ["RTLS", "RIV", "RLS", "TLS_BATCH", "REFINED"]
