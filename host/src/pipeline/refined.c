@@ -389,10 +389,11 @@ static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t 
         if (used < 2) break;
         if (fabs(step) < 20) break; /* 20 us: far below what moves the estimate */
     }
+    /* The last step left the kinematics at the delay. */
     const int64_t delay = llround(d);
     *used_it = 0;
     if (llabs(delay) >= DELAY_USE_US) {
-        const int64_t used = kinematics_at(r, count, delay);
+        const int64_t used = kin_count(r);
         const double rss =
             used > 1 ? fit_residual(r, n_params, g_init, force_sigma, torque_sigma, NULL, NULL) /
                            (double)used
