@@ -16,8 +16,10 @@
  *   delay    the joint stamps' delay against the wrench's (a transport
  *            or clock offset: 5 ms of it cost 14 % of Ixx about the COM),
  *            fitted by Gauss-Newton on the predicted wrench's time
- *            derivative, used when 1 ms or more and it lowers the
- *            residual (below, the fit sees the misfit's phase too);
+ *            derivative, with a standard error from its scores over
+ *            ten stretches of the window; used when 1 ms or more, at
+ *            least 3 standard errors, and it lowers the residual
+ *            (below 1 ms, the fit sees the misfit's phase too);
  *            reported, and warned about when used: the on-line methods
  *            carry it unless kalman.joint_delay_s says it.
  *   sources  a - g, omega and alpha all from the smoothed joints. The
@@ -63,8 +65,10 @@ typedef struct {
     double jerk_psd;              /* the smoother's, chosen from the data */
     int64_t joint_delay_us;       /* the joint stamps' delay against the wrench's,
                                   fitted */
+    double joint_delay_std_us;    /* its standard error (Inf when not fitted) */
     int joint_delay_used;         /* REFINED took its kinematics that much later
-                                  (a delay of 1 ms or more that lowers the residual) */
+                                  (a delay of 1 ms or more, at least 3 standard
+                                  errors, that lowers the residual) */
     loadid_noise_levels_t levels; /* the levels the final weights used */
 } loadid_refined_report_t;
 

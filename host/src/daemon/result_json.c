@@ -136,6 +136,8 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
             number(out, ref->omega_rms);
             fputs(", \"joint_delay_s\": ", out);
             number(out, (double)ref->joint_delay_us * 1e-6);
+            fputs(", \"joint_delay_std_s\": ", out);
+            number(out, ref->joint_delay_std_us * 1e-6);
             fprintf(out, ", \"joint_delay_used\": %s", ref->joint_delay_used ? "true" : "false");
             fputs(", \"levels\": ", out);
             levels(out, &ref->levels);

@@ -520,18 +520,19 @@ static void refined_noted(loadid_pipeline_t *p) {
     note(p,
          "REFINED: %lld samples on the smoothed joints (jerk PSD %.3g; the accelerometer "
          "differs from them by %.3g m/s^2, %.3g rad/s^2 RMS); rows f %.3g N, tau %.3g N m (of "
-         "which unexplained %.3g, %.3g); joint stamps %.2f ms behind the wrench's (fitted%s)",
+         "which unexplained %.3g, %.3g); joint stamps %.2f ms behind the wrench's (fitted, "
+         "std %.2f ms%s)",
          (long long)p->refined_rep.samples, p->refined_rep.jerk_psd,
          p->refined_rep.sensor_spec_error, p->refined_rep.sensor_alpha_error, l->force, l->torque,
          p->refined_rep.unexplained[0], p->refined_rep.unexplained[1],
-         (double)p->refined_rep.joint_delay_us / 1e3,
+         (double)p->refined_rep.joint_delay_us / 1e3, p->refined_rep.joint_delay_std_us / 1e3,
          p->refined_rep.joint_delay_used ? ", used" : "");
     if (p->refined_rep.joint_delay_used)
         note(p,
              "warning: joints: their stamps are %.2f ms behind the wrench's (REFINED's fit, "
-             "which used it); the on-line methods carry that as misfit: kalman.joint_delay_s: "
-             "%.4f (with what is set now) corrects them",
-             (double)p->refined_rep.joint_delay_us / 1e3,
+             "std %.2f ms, which used it); the on-line methods carry that as misfit: "
+             "kalman.joint_delay_s: %.4f (with what is set now) corrects them",
+             (double)p->refined_rep.joint_delay_us / 1e3, p->refined_rep.joint_delay_std_us / 1e3,
              p->cfg.kalman_joint_delay_s + (double)p->refined_rep.joint_delay_us * 1e-6);
 }
 

@@ -325,74 +325,119 @@ static double fit_residual(const loadid_refined_t *r, int n_params, const loadid
     return yy - fit;
 }
 
-/* One Gauss-Newton step of the joint stamps' delay against the wrench's:
- * with phi the least-squares fit at delay d, the residual y - A(t + d) phi
- * is to first order (D - d) times the predicted wrench's time derivative
- * (central differences over the samples), D the true delay; returns the
- * step D - d [us] (0 when it cannot be taken). */
-static double delay_step(const loadid_refined_t *r, int n_params, const loadid_real_t g_init[3],
-                         double force_sigma, double torque_sigma) {
+/* One Gauss-Newton step of the joint stamps' delay against the wrench's,
+ * and its standard error. With phi the least-squares fit at delay d, the
+ * residual r = y - A(t + d) phi is to first order (D - d) c, c the
+ * predicted wrench's time derivative (central differences over the
+ * samples), D the true delay; phi takes up the part of c inside the span
+ * of A, so the step is c_p^T W r / c_p^T W c_p, c_p = c - A b,
+ * b = (A^T W A)^-1 A^T W c. Its variance is a cluster sandwich over
+ * DELAY_BLOCKS stretches of the window: the residual's misfit (servo lag,
+ * backlash) is correlated over many samples, which white rows would not
+ * count. step and std in us; step 0 when it cannot be taken. */
+#define DELAY_BLOCKS 10
+typedef struct {
+    double step, std;
+} delay_step_t;
+
+static delay_step_t delay_step(const loadid_refined_t *r, int n_params,
+                               const loadid_real_t g_init[3], double force_sigma,
+                               double torque_sigma) {
+    const int n = n_params;
+    delay_step_t out = {0, INFINITY};
     double x[16];
-    if (!isfinite(fit_residual(r, n_params, g_init, force_sigma, torque_sigma, NULL, x))) return 0;
+    if (!isfinite(fit_residual(r, n, g_init, force_sigma, torque_sigma, NULL, x))) return out;
     loadid_real_t phi[16];
-    for (int p = 0; p < n_params; ++p) phi[p] = (loadid_real_t)x[p];
-    double cc = 0, cr = 0;
-    loadid_real_t pred[3][6] = {{0}};
+    for (int p = 0; p < n; ++p) phi[p] = (loadid_real_t)x[p];
+    double M[16 * 16] = {0}, g[16] = {0}, cc = 0;
+    double block_cr[DELAY_BLOCKS] = {0}, block_ar[DELAY_BLOCKS][16] = {{0}};
+    loadid_real_t A[3][6 * 16], pred[3][6];
     int64_t t[3] = {0, 0, 0};
-    int have = 0; /* predictions of consecutive usable samples i-2, i-1, i */
+    int have = 0; /* consecutive usable samples i-2, i-1, i */
     for (int i = 0; i < r->scount; ++i) {
-        loadid_real_t A[6 * 16];
         const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
-        if (!r->kin_ok[i] || loadid_regressor_model(k, k + 3, k + 6, n_params, g_init, A)) {
+        memmove(A[0], A[1], 2 * sizeof A[0]);
+        memmove(pred[0], pred[1], 2 * sizeof pred[0]);
+        t[0] = t[1], t[1] = t[2];
+        if (!r->kin_ok[i] || loadid_regressor_model(k, k + 3, k + 6, n, g_init, A[2])) {
             have = 0;
             continue;
         }
-        memmove(pred[0], pred[1], 2 * sizeof pred[0]);
-        t[0] = t[1], t[1] = t[2];
-        loadid_regressor_apply(A, n_params, phi, pred[2]);
+        loadid_regressor_apply(A[2], n, phi, pred[2]);
         t[2] = r->s[i].t;
         if (++have < 3 || t[2] <= t[0]) continue;
         const int m = i - 1; /* the middle sample */
+        const int blk = (int)((int64_t)m * DELAY_BLOCKS / r->scount);
         for (int row = 0; row < 6; ++row) {
             const double w = 1.0 / sq(row < 3 ? force_sigma : torque_sigma);
             const double c = (double)(pred[2][row] - pred[0][row]) / (double)(t[2] - t[0]);
+            const double res = (double)(r->s[m].y[row] - pred[1][row]);
+            const loadid_real_t *a = A[1] + row * n;
             cc += w * c * c;
-            cr += w * c * (double)(r->s[m].y[row] - pred[1][row]);
+            block_cr[blk] += w * c * res;
+            for (int p = 0; p < n; ++p) {
+                if (a[p] == 0) continue;
+                g[p] += w * a[p] * c;
+                block_ar[blk][p] += w * a[p] * res;
+                for (int q = 0; q <= p; ++q) M[p * n + q] += w * a[p] * a[q];
+            }
         }
     }
-    return cc > 0 ? cr / cc : 0;
+    for (int p = 0; p < n; ++p)
+        for (int q = 0; q < p; ++q) M[q * n + p] = M[p * n + q];
+    double b[16];
+    memcpy(b, g, sizeof b);
+    if (spd_solve(M, b, n)) return out;
+    double J = cc; /* c_p^T W c_p */
+    for (int p = 0; p < n; ++p) J -= g[p] * b[p];
+    if (!(J > 0)) return out;
+    /* Each block's score c_p^T W r; their sum is the step's numerator. */
+    double score[DELAY_BLOCKS], sum = 0;
+    for (int k = 0; k < DELAY_BLOCKS; ++k) {
+        score[k] = block_cr[k];
+        for (int p = 0; p < n; ++p) score[k] -= b[p] * block_ar[k][p];
+        sum += score[k];
+    }
+    double var = 0;
+    for (int k = 0; k < DELAY_BLOCKS; ++k) var += sq(score[k] - sum / DELAY_BLOCKS);
+    out.step = sum / J;
+    out.std = sqrt(var * DELAY_BLOCKS / (DELAY_BLOCKS - 1.0)) / J;
+    return out;
 }
 
 /* The joint stamps' delay against the wrench's (a transport or clock
  * offset the recording carries): Gauss-Newton on the kinematics at the
  * samples' times plus the delay, from 0, each step evaluated again. On the
  * joints of the best smoothing (r->count entries). Returns the delay
- * [us]; the kinematics are left at it when it is at least DELAY_USE_US
- * and lowers the residual, else at 0 (*used says which). Below that the
- * fit sees the misfit's own phase too (servo lag, backlash, the JR3's
- * frames stamped at reception): on the simulated RX60 and 7-joint chain
- * it found -0.4 to -0.6 ms, and using it left REFINED's median inertia
- * error 5 % worse (2.35 % against 2.24 %, 120 recordings). */
+ * [us] and its standard error (*std_us); the kinematics are left at it
+ * when it is at least DELAY_USE_US and DELAY_SIGNIFICANT standard errors
+ * and lowers the residual, else at 0 (*used says which). Below 1 ms the
+ * fit mostly sees the misfit's phase (servo lag, backlash): simulated
+ * without a delay, -1.0 to +0.35 ms, and using it left REFINED's median
+ * inertia error 5 % worse (2.35 % against 2.24 %, 120 recordings). */
 #define DELAY_MAX_US 50000
 #define DELAY_USE_US 1000
+#define DELAY_SIGNIFICANT 3.0
 static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t g_init[3],
-                         double force_sigma, double torque_sigma, int *used_it) {
+                         double force_sigma, double torque_sigma, double *std_us, int *used_it) {
     const int count = r->count;
     /* The kinematics at 0 are in place (the best smoothing's). */
     const double rss0 = fit_residual(r, n_params, g_init, force_sigma, torque_sigma, NULL, NULL) /
                         (double)kin_count(r);
     double d = 0;
+    *std_us = INFINITY;
     for (int it = 0; it < 4; ++it) {
-        const double step = delay_step(r, n_params, g_init, force_sigma, torque_sigma);
-        d = fmax(-DELAY_MAX_US, fmin(DELAY_MAX_US, d + step));
+        const delay_step_t step = delay_step(r, n_params, g_init, force_sigma, torque_sigma);
+        d = fmax(-DELAY_MAX_US, fmin(DELAY_MAX_US, d + step.step));
+        *std_us = step.std;
         const int64_t used = kinematics_at(r, count, llround(d));
         if (used < 2) break;
-        if (fabs(step) < 20) break; /* 20 us: far below what moves the estimate */
+        if (fabs(step.step) < 20) break; /* 20 us: far below what moves the estimate */
     }
     /* The last step left the kinematics at the delay. */
     const int64_t delay = llround(d);
     *used_it = 0;
-    if (llabs(delay) >= DELAY_USE_US) {
+    if (llabs(delay) >= DELAY_USE_US && (double)llabs(delay) >= DELAY_SIGNIFICANT * *std_us) {
         const int64_t used = kin_count(r);
         const double rss =
             used > 1 ? fit_residual(r, n_params, g_init, force_sigma, torque_sigma, NULL, NULL) /
@@ -443,7 +488,7 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     jf.jerk_psd = (loadid_real_t)best_psd;
     rep->jerk_psd = best_psd;
     rep->joint_delay_us = fit_delay(r, n_params, g_init, rep->levels.force, rep->levels.torque,
-                                    &rep->joint_delay_used);
+                                    &rep->joint_delay_std_us, &rep->joint_delay_used);
     used = kin_count(r);
     double smooth_sigma[3];
     loadid_jf_steady_sigma(&jf, 1e-3, 1, smooth_sigma);
