@@ -771,7 +771,7 @@ int main(int argc, char **argv) {
     printf("    %-40s : %10.3f us  %s   (loadidd's weights for joint-filter columns)\n", label,
            rtls_exact.st.median, met(rtls_exact.st.median <= kTargetLiveUs));
 #ifdef LOADID_BENCH_SHORTCUT
-    snprintf(label, sizeof label, "Gram shortcut / RTLS >= %.1fx", kTargetShortcutRatio);
+    snprintf(label, sizeof label, "Gram shortcut / RTLS >= %.2fx", kTargetShortcutRatio);
     printf("    %-40s : %10.2f x   %s\n", label, sc_ratio, met(sc_ratio >= kTargetShortcutRatio));
 #endif
     if (have_cpu_clock)
