@@ -63,7 +63,8 @@ from conftest import (
 RX60 = REPO_ROOT / "host" / "config" / "robots" / "rx60.urdf"
 URDF_DATA = REPO_ROOT / "tests" / "data" / "urdf"
 TRACK7 = URDF_DATA / "track7.urdf"
-ROBOTS = {"rx60": RX60, "track7": TRACK7}
+UR5 = URDF_DATA / "ur5_jr3.urdf"
+ROBOTS = {"rx60": RX60, "track7": TRACK7, "ur5": UR5}
 BASE, SENSOR = "base_link", "ft_sensor"
 
 N_SAMPLES = 1000
@@ -278,7 +279,7 @@ def test_loader_chain_matches_urdf_text(loaded, robot):
     assert chain.base_link.decode() == BASE and chain.sensor_link.decode() == SENSOR
     assert chain_check(chain) == 0
     folded, (tip_xyz, tip_rot) = expected_folded(ROBOTS[robot])
-    assert chain.num_joints == len(folded) == {"rx60": 6, "track7": 7}[robot]
+    assert chain.num_joints == len(folded) == {"rx60": 6, "track7": 7, "ur5": 6}[robot]
     for i, (j, xyz, rot) in enumerate(folded):
         d = chain.joints[i]
         assert d.name.decode() == j["name"], i

@@ -127,6 +127,10 @@ ROBOTS = {
     # the JR3 link ft_sensor (as test_kinematics_pinocchio.py loads it).
     "track7": dict(urdf=REPO / "tests" / "data" / "urdf" / "track7.urdf",
                    base_link="base_link", sensor_link="ft_sensor"),
+    # tests/data/urdf/ur5_jr3.urdf: a UR5 (shoulder and elbow offsets, joints
+    # about y) on a tilted plate, a JR3 turned 45 degrees on an adapter.
+    "ur5": dict(urdf=REPO / "tests" / "data" / "urdf" / "ur5_jr3.urdf",
+                base_link="base_link", sensor_link="ft_sensor"),
 }
 GRAVITY = np.array([0.0, 0.0, -9.81])  # robot.gravity (the default), in base_link's frame
 
