@@ -11,6 +11,7 @@
 
 #include "enum_value.hpp"
 #include "finite.hpp"
+#include "stamp_clock.hpp"
 
 using namespace loadid;
 
@@ -21,10 +22,7 @@ struct loadid_signals {
     loadid_jf_t *measured;
     loadid_jf_t *setpoint;
     loadid_signals_stats_t stats;
-    // The joint stamps' phase-locked loop: the last regularised time, the
-    // period, the last raw stamp (INT64_MIN: none yet).
-    double pll_t, pll_period;
-    int64_t pll_last_raw;
+    StampClock clock; // the joint stamps regularised (stamp_clock.hpp)
     bool piece_ended; // loadid_signals_end_piece since the last joint state
     // The period probe (cfg.period_probe): the joint states held until the
     // period is known; period_us the filters' period, 0 while probing.
@@ -90,43 +88,6 @@ void motion_of(const loadid_kin_state_t &k, loadid_regressor_input_t &m) {
     copy3(m.alpha, k.alpha);
 }
 
-// The joint stamp t_raw regularised (signals.h, stamp_gain): a second-order
-// phase-locked loop on the stream's own rate. Returns the time to use;
-// commit: update the loop (only for a stamp that is taken).
-int64_t regularise(loadid_signals *s, int64_t t_raw, bool commit) {
-    const double g = s->cfg.stamp_gain;
-    if (g >= 1) return t_raw;
-    double t = double(t_raw), period = s->pll_period;
-    if (s->pll_last_raw != INT64_MIN) {
-        const double measured = double(t_raw) - double(s->pll_last_raw);
-        const double pred = s->pll_t + period;
-        const double err = double(t_raw) - pred;
-        // Lost messages (refused by the decoder, skipped in a damaged log,
-        // a stalled stream): the stamp lands k whole periods on. That is
-        // no new rate; taking the long interval for the period put the
-        // next stamp a few us after this one and the filters' q'' went
-        // wild (one lost joint state cost RTLS 30 % of the mass).
-        const double k = period > 0 ? std::round((double(t_raw) - s->pll_t) / period) : 0;
-        const double err_k = double(t_raw) - (s->pll_t + k * period);
-        if (period > 0 && std::abs(err) <= 0.5 * period) {
-            t = pred + g * err;
-            period += g * g / 4 * err; // critically damped
-        } else if (k >= 2 && std::abs(err_k) <= 0.25 * period) {
-            t = s->pll_t + k * period + g * err_k;
-            period += g * g / 4 * err_k / k;
-        } else if (measured > 0) {
-            period = measured; // resynchronise: the raw stamp, the last interval
-        }
-    }
-    const int64_t out = int64_t(std::llround(t));
-    if (commit) {
-        s->pll_t = t;
-        s->pll_period = period;
-        s->pll_last_raw = t_raw;
-    }
-    return out;
-}
-
 // Counts a refusal by its cause and passes the code on.
 int refuse(loadid_signals *s, int rc) {
     if (rc == LOADID_E_NO_DATA)
@@ -185,7 +146,7 @@ extern "C" int loadid_signals_create(const loadid_chain_t *chain, const double g
         return rc;
     }
     s->n = chain->num_joints;
-    s->pll_last_raw = INT64_MIN;
+    s->clock.reset();
     s->period_us = cfg->period_probe > 0 ? 0 : cfg->measured.nominal_step_us;
     *out = s;
     return 0;
@@ -200,7 +161,7 @@ extern "C" int loadid_signals_reset(loadid_signals_t *s) {
     loadid_jf_reset(s->measured);
     loadid_jf_reset(s->setpoint);
     s->stats = loadid_signals_stats_t{};
-    s->pll_last_raw = INT64_MIN;
+    s->clock.reset();
     s->held_count = 0;
     return 0;
 }
@@ -217,7 +178,7 @@ int check_joints(const loadid_signals *s, int64_t t_us, int num_joints,
     if (num_joints != s->n || !position) return -EBADMSG;
     if (!all_finite(position, s->n) || (setpoint && !all_finite(setpoint, s->n)))
         return LOADID_E_NONFINITE;
-    if (t_us <= s->pll_last_raw) return LOADID_E_TIME_ORDER;
+    if (t_us <= s->clock.last_raw()) return LOADID_E_TIME_ORDER;
     return 0;
 }
 
@@ -230,7 +191,8 @@ int feed(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *p
     int rc = check_joints(s, t_us, num_joints, position, setpoint);
     // The regularised stamp; a loop that has not locked yet may not go
     // backwards in time.
-    if (rc == 0) t_us = regularise(s, t_us, false);
+    const double nominal = double(s->period_us);
+    if (rc == 0) t_us = s->clock.regularise(t_us, nominal, s->cfg.stamp_gain, false);
     if (rc == 0 && (t_us <= loadid_jf_last_time(s->measured) ||
                     (setpoint && t_us <= loadid_jf_last_time(s->setpoint))))
         rc = LOADID_E_TIME_ORDER;
@@ -240,7 +202,7 @@ int feed(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *p
         ++s->stats.joint_msgs_bad;
         return rc;
     }
-    regularise(s, raw, true);
+    s->clock.regularise(raw, nominal, s->cfg.stamp_gain, true);
     ++s->stats.joint_msgs_ok;
     s->piece_ended = false;
     return 0;
@@ -264,6 +226,34 @@ void configure_for(loadid_signals *s, int64_t p) {
     loadid_jf_configure(s->setpoint, &s->cfg.setpoint);
 }
 
+// The period of k + 1 held stamps: their intervals' median (robust to a
+// lost message), then the least-squares slope of the stamps against
+// their period counts (each interval that median, rounded, at least 1).
+// Under 200 us of jitter the median alone was 8 % off at 1 kHz; the slope
+// of 9 stamps is within about 1.5 %.
+int64_t probed_period(const loadid_signals::Held *held, int k) {
+    int64_t d[LOADID_SIGNALS_MAX_PROBE];
+    for (int i = 0; i < k; ++i) d[i] = held[i + 1].t - held[i].t;
+    std::sort(d, d + k);
+    const int64_t median = k % 2 ? d[k / 2] : (d[k / 2 - 1] + d[k / 2]) / 2;
+    if (median <= 0) return median;
+    double count[LOADID_SIGNALS_MAX_PROBE + 1], mean_i = 0, mean_t = 0;
+    count[0] = 0;
+    for (int i = 1; i <= k; ++i)
+        count[i] = count[i - 1] +
+                   std::max(1.0, std::round(double(held[i].t - held[i - 1].t) / double(median)));
+    for (int i = 0; i <= k; ++i) {
+        mean_i += count[i] / (k + 1);
+        mean_t += double(held[i].t - held[0].t) / (k + 1);
+    }
+    double c_ii = 0, c_it = 0;
+    for (int i = 0; i <= k; ++i) {
+        c_ii += (count[i] - mean_i) * (count[i] - mean_i);
+        c_it += (count[i] - mean_i) * (double(held[i].t - held[0].t) - mean_t);
+    }
+    return c_ii > 0 ? int64_t(std::llround(c_it / c_ii)) : median;
+}
+
 // A joint state while probing: held (counted when it reaches the filters);
 // with period_probe + 1 of them the period is their intervals' median, and
 // they go into the filters.
@@ -283,11 +273,7 @@ int probe(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *
     if (setpoint) std::memcpy(h.setpoint, setpoint, size_t(s->n) * sizeof *setpoint);
     const int k = s->cfg.period_probe;
     if (s->held_count <= k) return 0;
-    int64_t d[LOADID_SIGNALS_MAX_PROBE];
-    for (int i = 0; i < k; ++i) d[i] = s->held[i + 1].t - s->held[i].t;
-    std::sort(d, d + k);
-    const int64_t median = k % 2 ? d[k / 2] : (d[k / 2 - 1] + d[k / 2]) / 2;
-    configure_for(s, std::clamp<int64_t>(median, 50, 1000000));
+    configure_for(s, std::clamp<int64_t>(probed_period(s->held, k), 50, 1000000));
     for (int i = 0; i < s->held_count; ++i) {
         const auto &e = s->held[i];
         rc = feed(s, e.t, s->n, e.q, e.has_setpoint ? e.setpoint : nullptr);
@@ -311,7 +297,7 @@ extern "C" int64_t loadid_signals_joint_period_us(const loadid_signals_t *s) {
 }
 
 extern "C" double loadid_signals_stream_period_us(const loadid_signals_t *s) {
-    return s && s->pll_last_raw != INT64_MIN ? s->pll_period : 0;
+    return s && s->clock.last_raw() != INT64_MIN ? s->clock.period() : 0;
 }
 
 extern "C" int loadid_signals_filter_config(const loadid_signals_t *s, loadid_jf_config_t *out) {

@@ -77,17 +77,21 @@ typedef struct {
      * k >= 2 of periods on (within a quarter period) follows k - 1 lost
      * messages and keeps the period; any other stamp more than half a
      * period off the prediction resynchronises the loop (a bunched
-     * message, a stream at another rate). stamp_gain in (0, 1]; 1 keeps the stamps
-     * as they are. Default 0.005: jitter divided by about 20 (sqrt(g/2)),
-     * locked within about 1 / g = 200 joint states; with 200 us of
-     * jitter the on-line estimates equal those without, where 0.02 still
-     * cost RLS 3 % of the mass. */
+     * message, a stream at another rate). Such a loop pulls in only a
+     * period error small against stamp_gain, so it first acquires: the
+     * stamps since (re)start are taken from their least-squares line
+     * against their period counts, from the filters' period, until 4 /
+     * stamp_gain of them, where the line's gain has fallen to the loop's
+     * (src/stamp_clock.hpp). stamp_gain in (0, 1]; 1 keeps the stamps as
+     * they are. Default 0.005: jitter divided by about 20 (sqrt(g/2)) once
+     * locked; 0.02 still cost RLS 3 % of the mass with 200 us of jitter. */
     double stamp_gain;
     /* The joint stream's period measured instead of configured: with
      * period_probe > 0 the first period_probe + 1 joint states are held
      * (samples meanwhile get LOADID_E_NO_DATA; the states are counted
-     * when they reach the filters), the median of their
-     * intervals is the period P, and both filter banks are configured
+     * when they reach the filters), the least-squares slope of their
+     * stamps against their period counts (each interval their median,
+     * rounded) is the period P, and both filter banks are configured
      * for it before the held states go in: nominal_step_us P, lag_steps
      * lag_us / P (at most LOADID_JF_MAX_LAG), and max_joint_age_us and
      * max_step_us at least 2 P, so that a sample between two joint states
