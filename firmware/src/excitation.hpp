@@ -256,7 +256,8 @@ CovInput cov_input(CovKind kind, const Excitation<N> &ex, const Real *t, int64_t
             ex.row_weight().data(),
             N == LOADID_NPHI ? cfg.offset_cov : nullptr,
             cfg.noise_sigma,
-            cfg.noise_corr};
+            cfg.noise_corr,
+            cfg.col_exact};
 }
 
 inline Vec6 row_weights(const loadid_est_config_t &cfg) {

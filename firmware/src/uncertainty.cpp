@@ -3,9 +3,11 @@
 // squares the condition number.
 #include "uncertainty.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
@@ -53,6 +55,25 @@ Md offset_share(const CovInput &in, const Vd &t, const Md &inv) {
                       static_cast<double>(in.row_weight[r]);
     const Md jac = inv * s;
     return jac * cov0 * jac.transpose();
+}
+
+// b b^T, b = h^-1 C phi: what the noise of the columns taken as exact may
+// pull the estimate by (uncertainty.hpp). h: sum A^T W A (n x n, without
+// the column weights).
+Md attenuation_share(const CovInput &in, const Vd &t, const Vd &phi, const Md &h) {
+    const int n = in.n;
+    Vd c = Vd::Zero(n);
+    if (!in.col_exact) return Md::Zero(n, n);
+    for (int j = 0; j < std::min(n, LOADID_NPHI); ++j) { // the offset columns are exact
+        const double exact = static_cast<double>(in.col_exact[j]);
+        if (exact == 1.0) continue;
+        const double t_noise = t(j) / exact;
+        c(j) = 6.0 * static_cast<double>(in.samples) / (t_noise * t_noise);
+    }
+    if (!(c.maxCoeff() > 0)) return Md::Zero(n, n);
+    const Vd b = h.ldlt().solve(c.cwiseProduct(phi));
+    if (!b.allFinite()) return Md::Zero(n, n);
+    return b * b.transpose();
 }
 
 } // namespace
@@ -120,7 +141,8 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
         Md hi;
         if (!spd_inverse(h, hi)) return LOADID_E_NOT_EXCITED;
         const Md meat = sf2 * gf.topLeftCorner(n, n) + st2 * gt.topLeftCorner(n, n);
-        cov = hi * meat * hi + offset_share(in, t, hi);
+        cov = hi * meat * hi + offset_share(in, t, hi) +
+              attenuation_share(in, t, phi, g.topLeftCorner(n, n));
     }
     if (!cov.allFinite()) return LOADID_E_NOT_EXCITED;
     for (int i = 0; i < n; ++i) std[i] = static_cast<Real>(std::sqrt(std::max(cov(i, i), 0.0)));

@@ -170,6 +170,30 @@ static void test_ls_std_equals_normal_equations(void **state) {
             loadid_method_name(methods[mi]), share_max, share_worst);
         assert_true(share_worst < 1e-6);
         assert_true(share_max > 0.05); /* not negligible here */
+
+        /* Columns taken as exact (a joint filter's: weights 1e3 times
+         * their noise's, col_exact 1e3): std^2 grows by b_i^2, b = H^-1 C
+         * phi, C = diag(6 k / t_j^2), t_j the noise's own column weights. */
+        loadid_est_config_t ex = cfg;
+        for (int j = 0; j < 10; ++j) ex.col_weight[j] *= 1e3f, ex.col_exact[j] = 1e3f;
+        loadid_real_t phi2[10], std2[10];
+        fit(&d, &ex, phi2, std2, &scale);
+        double cphi[10], b[10] = {0}, bias_worst = 0, bias_max = 0;
+        for (int j = 0; j < 10; ++j)
+            cphi[j] = 6.0 * d.n_samples / ((double)cfg.col_weight[j] * cfg.col_weight[j]) * phi2[j];
+        for (int i = 0; i < 10; ++i)
+            for (int j = 0; j < 10; ++j) b[i] += inv[i * 10 + j] * cphi[j];
+        for (int i = 0; i < 10; ++i) {
+            const double got = (double)std2[i] * std2[i] - (double)std1[i] * std1[i];
+            bias_worst = fmax(bias_worst, fabs(got - b[i] * b[i]) / (b[i] * b[i]));
+            bias_max = fmax(bias_max, b[i] * b[i] / ((double)std2[i] * std2[i]));
+        }
+        print_message(
+            "%s: exact columns' attenuation share of the variance up to %.2f, against "
+            "H^-1 C phi: worst relative difference %.2e\n",
+            loadid_method_name(methods[mi]), bias_max, bias_worst);
+        assert_true(bias_worst < 1e-6);
+        assert_true(bias_max > 0.05);
     }
     dataset_free(&d);
 }
