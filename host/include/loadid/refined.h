@@ -29,6 +29,10 @@
  *            a vibration or a bias in a channel (which its noise figure
  *            does not show) cannot reach REFINED. Their RMS difference to
  *            the smoothed joints is reported.
+ *   drift    with the offset estimated (no zeroing), a linear drift of it
+ *            too (a sensor warming up): least squares with columns
+ *            (t - t_mid) E6 beside [A E6]; the wrench fed is detrended by
+ *            it, and phi_std gains what estimating it costs.
  *   weights  the smoothed joints' columns are treated as exact (the mixed
  *            LS-TLS limit: their noise set 1e-3 of the smoother's own
  *            covariance, whose white-jerk model overstates the error of a
@@ -69,6 +73,9 @@ typedef struct {
     int joint_delay_used;         /* REFINED took its kinematics that much later
                                   (a delay of 1 ms or more, at least 3 standard
                                   errors, that lowers the residual) */
+    int drift_fitted;             /* with the offset estimated: its linear drift */
+    double drift[6];              /* [N/s, N m/s], taken out of the wrench fed */
+    double drift_var[10];         /* what estimating it adds to phi's variance */
     loadid_noise_levels_t levels; /* the levels the final weights used */
 } loadid_refined_report_t;
 

@@ -139,6 +139,10 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
             fputs(", \"joint_delay_std_s\": ", out);
             number(out, ref->joint_delay_std_us * 1e-6);
             fprintf(out, ", \"joint_delay_used\": %s", ref->joint_delay_used ? "true" : "false");
+            if (ref->drift_fitted) {
+                fputs(", \"drift\": ", out);
+                array(out, ref->drift, 6);
+            }
             fputs(", \"levels\": ", out);
             levels(out, &ref->levels);
             fputc('}', out);

@@ -295,6 +295,11 @@ static void model_of(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
     loadid_real_t std[16], scale = 0;
     if (loadid_est_uncertainty(p->est[m], phi, std, &scale) != 0)
         for (int i = 0; i < 16; ++i) std[i] = (loadid_real_t)INFINITY;
+    /* REFINED's offset drift: what estimating it costs (refined.h). */
+    if (m == p->refined_m && p->refined_rep.drift_fitted)
+        for (int i = 0; i < 10; ++i)
+            std[i] =
+                (loadid_real_t)sqrt((double)std[i] * (double)std[i] + p->refined_rep.drift_var[i]);
     /* How far the load's groups stand out of the noise in the data. */
     loadid_real_t load_n[16] = {0}, snr[3];
     for (int i = 0; i < 10; ++i) load_n[i] = load[i];
@@ -527,6 +532,12 @@ static void refined_noted(loadid_pipeline_t *p) {
          p->refined_rep.unexplained[0], p->refined_rep.unexplained[1],
          (double)p->refined_rep.joint_delay_us / 1e3, p->refined_rep.joint_delay_std_us / 1e3,
          p->refined_rep.joint_delay_used ? ", used" : "");
+    if (p->refined_rep.drift_fitted)
+        note(p,
+             "REFINED: the offset drifts %.3g %.3g %.3g N/s, %.3g %.3g %.3g N m/s (fitted, taken "
+             "out)",
+             p->refined_rep.drift[0], p->refined_rep.drift[1], p->refined_rep.drift[2],
+             p->refined_rep.drift[3], p->refined_rep.drift[4], p->refined_rep.drift[5]);
     if (p->refined_rep.joint_delay_used)
         note(p,
              "warning: joints: their stamps are %.2f ms behind the wrench's (REFINED's fit, "
