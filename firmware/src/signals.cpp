@@ -255,7 +255,7 @@ int64_t probed_period(const loadid_signals::Held *held, int k) {
 }
 
 // A joint state while probing: held (counted when it reaches the filters);
-// with period_probe + 1 of them the period is their intervals' median, and
+// with period_probe + 1 of them the period is measured (probed_period), and
 // they go into the filters.
 int probe(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *position,
           const loadid_real_t *setpoint) {
