@@ -35,6 +35,7 @@ class Excitation {
         gram_.setZero();
         gram_torque_.setZero();
         row_sum_.setZero();
+        drift_.reset();
     }
 
     void set_weights(const Vec6 &row_weight, const Vec<N1> &col_weight) {
@@ -56,6 +57,8 @@ class Excitation {
         for (int i = 0; i < LOADID_NROWS; ++i) {
             d_(i) /= i < 3 ? force : torque;
             row_sum_.row(i) *= columns / (i < 3 ? force : torque);
+            drift_.cross.row(i) *= double(columns / (i < 3 ? force : torque));
+            drift_.y(i) /= double(i < 3 ? force : torque);
         }
         t_.template head<N>() *= columns;
     }
@@ -70,8 +73,10 @@ class Excitation {
             gram_ = forgetting * gram_;
             gram_torque_ = forgetting * gram_torque_;
             row_sum_ = forgetting * row_sum_;
+            drift_.forget(double(forgetting));
         }
         row_sum_ += W.template leftCols<N>();
+        if (N == LOADID_NPHI_OFFSET) drift_.add(W);
         // Only the lower triangle is computed and read (the eigen-solvers take
         // it): the Gram matrix is exactly symmetric, and half the work. The
         // loop sums in the order of Eigen's selfadjointView().rankUpdate()
@@ -155,6 +160,37 @@ class Excitation {
     // sum_k D A_k T1, what one wrench error shared by every row (the
     // zeroing offset's) moves the estimate by (uncertainty.hpp).
     const Eigen::Matrix<Real, LOADID_NROWS, N> &row_sum() const { return row_sum_; }
+    // With the offset estimated: the sums a linear drift of it needs
+    // (uncertainty.hpp), time in thousands of samples.
+    struct DriftSums {
+        Eigen::Matrix<double, LOADID_NROWS, N> cross; // sum_k t_k D A_k T1
+        Eigen::Matrix<double, LOADID_NROWS, 1> y;     // sum_k t_k D y_k
+        double t = 0, tt = 0;                         // sum_k t_k, sum_k t_k^2
+        double k = 0;                                 // samples
+        void reset() {
+            cross.setZero();
+            y.setZero();
+            t = tt = k = 0;
+        }
+        void forget(double f) {
+            cross *= f;
+            y *= f;
+            t *= f;
+            tt *= f;
+        }
+        template <class Weighted>
+        void add(const Weighted &w) {
+            const double tk = k * 1e-3;
+            for (int r = 0; r < LOADID_NROWS; ++r) {
+                for (int j = 0; j < N; ++j) cross(r, j) += tk * double(w(r, j));
+                y(r) += tk * double(w(r, N));
+            }
+            t += tk;
+            tt += tk * tk;
+            k += 1;
+        }
+    };
+    const DriftSums &drift_sums() const { return drift_; }
 
   private:
     static constexpr int kWarmSteps = 4;
@@ -234,6 +270,7 @@ class Excitation {
     Eigen::Matrix<Real, N1, N1> gram_;
     Eigen::Matrix<Real, N1, N1> gram_torque_;
     Eigen::Matrix<Real, LOADID_NROWS, N> row_sum_;
+    DriftSums drift_;
 };
 
 // What an estimator hands uncertainty.hpp: the gate's matrices and sums
@@ -243,21 +280,15 @@ template <int N>
 CovInput cov_input(CovKind kind, const Excitation<N> &ex, const Real *t, int64_t samples,
                    const Real *phi, const loadid_est_config_t &cfg, const Real *iv_m = nullptr,
                    const Real *iv_cc = nullptr) {
-    return {kind,
-            N,
-            ex.gram().data(),
-            ex.gram_torque().data(),
-            t,
-            samples,
-            phi,
-            iv_m,
-            iv_cc,
-            ex.row_sum().data(),
-            ex.row_weight().data(),
-            N == LOADID_NPHI ? cfg.offset_cov : nullptr,
-            cfg.noise_sigma,
-            cfg.noise_corr,
-            cfg.col_exact};
+    return {kind, N, ex.gram().data(), ex.gram_torque().data(), t, samples, phi, iv_m, iv_cc,
+            ex.row_sum().data(), ex.row_weight().data(),
+            N == LOADID_NPHI ? cfg.offset_cov : nullptr, cfg.noise_sigma, cfg.noise_corr,
+            cfg.col_exact,
+            // REFINED fits the drift itself (refined.h).
+            N == LOADID_NPHI_OFFSET && cfg.method != LOADID_METHOD_REFINED
+                ? ex.drift_sums().cross.data()
+                : nullptr,
+            ex.drift_sums().y.data(), ex.drift_sums().tt};
 }
 
 inline Vec6 row_weights(const loadid_est_config_t &cfg) {

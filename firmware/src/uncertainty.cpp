@@ -76,6 +76,40 @@ Md attenuation_share(const CovInput &in, const Vd &t, const Vd &phi, const Md &h
     return b * b.transpose();
 }
 
+// d d^T, d = phi_16 - phi_22: the least-squares estimates with a constant
+// offset and with a linearly drifting one (uncertainty.hpp), from the
+// weighted sums (gs: the (n+1) x (n+1) Gram with column weights t).
+Md drift_share(const CovInput &in, const Md &gs, const Vd &t) {
+    const int n = in.n;
+    if (!in.drift_cross || !in.drift_y || !in.row_weight || n != LOADID_NPHI_OFFSET)
+        return Md::Zero(n, n);
+    constexpr int kMaxDrift = LOADID_NPHI_OFFSET + LOADID_NROWS;
+    using Mw = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kMaxDrift,
+                             kMaxDrift>;
+    using Vw = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxDrift, 1>;
+    const int n2 = n + LOADID_NROWS;
+    // In the weighted coordinates x = T^-1 phi; the drift columns t_k E6
+    // weighted by the rows' D.
+    Mw h = Mw::Zero(n2, n2);
+    Vw rhs(n2);
+    h.topLeftCorner(n, n) = gs.topLeftCorner(n, n);
+    rhs.head(n) = gs.col(n).head(n);
+    for (int r = 0; r < LOADID_NROWS; ++r) {
+        const double d = static_cast<double>(in.row_weight[r]);
+        for (int j = 0; j < n; ++j) h(j, n + r) = h(n + r, j) = d * in.drift_cross[j * 6 + r];
+        h(n + r, n + r) = d * d * in.drift_tt;
+        rhs(n + r) = d * in.drift_y[r];
+    }
+    Eigen::LDLT<Mw> full(h);
+    Eigen::LDLT<Md> part(Md(h.topLeftCorner(n, n)));
+    if (full.info() != Eigen::Success || part.info() != Eigen::Success) return Md::Zero(n, n);
+    const Vw x22 = full.solve(rhs);
+    const Vd x16 = part.solve(Vd(rhs.head(n)));
+    if (!x22.allFinite() || !x16.allFinite()) return Md::Zero(n, n);
+    const Vd dphi = t.head(n).cwiseProduct(x16 - x22.head(n));
+    return dphi * dphi.transpose();
+}
+
 } // namespace
 
 int covariance_std(const CovInput &in, Real *std, Real *scale) {
@@ -124,7 +158,7 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
         Eigen::PartialPivLU<Md> lu(m);
         const Md mi = lu.inverse();
         if (!mi.allFinite()) return LOADID_E_NOT_EXCITED;
-        cov = s2_iv * mi * cc * mi.transpose() + offset_share(in, t, mi);
+        cov = s2_iv * mi * cc * mi.transpose() + offset_share(in, t, mi) + drift_share(in, gs, t);
     } else {
         Md h = g.topLeftCorner(n, n);
         if (in.kind == CovKind::TLS) {
@@ -142,7 +176,7 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
         if (!spd_inverse(h, hi)) return LOADID_E_NOT_EXCITED;
         const Md meat = sf2 * gf.topLeftCorner(n, n) + st2 * gt.topLeftCorner(n, n);
         cov = hi * meat * hi + offset_share(in, t, hi) +
-              attenuation_share(in, t, phi, g.topLeftCorner(n, n));
+              attenuation_share(in, t, phi, g.topLeftCorner(n, n)) + drift_share(in, gs, t);
     }
     if (!cov.allFinite()) return LOADID_E_NOT_EXCITED;
     for (int i = 0; i < n; ++i) std[i] = static_cast<Real>(std::sqrt(std::max(cov(i, i), 0.0)));

@@ -38,6 +38,13 @@
 // motion varies it, and its error is the measurement's: a UR5 at |omega|
 // <= 0.2 rad/s lost 26 % of the mass at 3.4 % phi_std. IV's instruments
 // do not see the columns' noise.
+// With the offset estimated, a constant offset is all the on-line methods
+// fit, but an F/T sensor's offset drifts (warming up), and on slow motion
+// a drift of 0.05 N/s and 0.002 N m/s moved RIV's COM by 26 mm at 5 mm
+// phi_std. The witness d = phi_16 - phi_22, the least-squares estimates
+// without and with a linear drift of the offset (6 columns t E6, from
+// sums the excitation keeps), is that drift's pull plus noise of
+// variance Var_22 - Var_16 (the cost of fitting it); d d^T is added.
 #pragma once
 
 #include <cstdint>
@@ -76,6 +83,12 @@ struct CovInput {
     // The estimator's col_exact (n + 1 values; nullptr: all 1): T / E, the
     // column weights over those of the columns' own noise.
     const Real *col_exact = nullptr;
+    // With the offset estimated (n = 16; nullptr: no drift witness):
+    // sum_k t_k D A_k T1 (6 x n, column-major), sum_k t_k D y_k (6) and
+    // sum_k t_k^2, t_k the sample's time (excitation.hpp).
+    const double *drift_cross = nullptr;
+    const double *drift_y = nullptr;
+    double drift_tt = 0;
 };
 
 // Fills std (n values) and *scale (s). Returns 0, or LOADID_E_NOT_EXCITED

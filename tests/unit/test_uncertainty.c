@@ -198,6 +198,89 @@ static void test_ls_std_equals_normal_equations(void **state) {
     dataset_free(&d);
 }
 
+/* With the offset estimated (16 parameters), a linear drift of it: the
+ * on-line methods' phi_std gains d_i^2, d = phi_16 - phi_22, the
+ * least-squares estimates with a constant offset and with columns t_k E6
+ * beside it (t_k = k / 1000, the sample's time), computed here from the
+ * rows; the rest of the variance is the normal equations' sandwich, as
+ * above. Noise in y only: the LS estimate, and d, do not depend on the
+ * column weights. */
+static void test_drift_witness_equals_least_squares(void **state) {
+    (void)state;
+    loadid_synth_noise_t y_only = kPaperNoise;
+    y_only.sigma_spec = y_only.sigma_alpha = y_only.sigma_omega = 0;
+    dataset_spec_t spec = {.seed = 11, .n_samples = 1500, .n_params = 16, .noise = y_only};
+    dataset_t d;
+    assert_int_equal(dataset_make(&spec, &d), 0);
+    const double drift[6] = {0.3, -0.2, 0.25, 0.02, -0.015, 0.01}; /* per second */
+    for (int k = 0; k < d.n_samples; ++k)
+        for (int r = 0; r < 6; ++r) d.y[6 * k + r] += (loadid_real_t)(drift[r] * k * 1e-3);
+    loadid_est_config_t cfg;
+    dataset_config(&spec, LOADID_METHOD_LS_BATCH, &cfg);
+    for (int i = 0; i < 3; ++i) cfg.row_sigma[i] = 0.1f, cfg.row_sigma[3 + i] = 0.005f;
+    loadid_est_t *est;
+    assert_int_equal(loadid_est_create(&cfg, &est), 0);
+    assert_int_equal(dataset_feed(&d, est, 0, d.n_samples), 0);
+    loadid_real_t phi[16], std[16], scale;
+    assert_int_equal(loadid_est_estimate(est, phi, NULL), 0);
+    assert_int_equal(loadid_est_uncertainty(est, phi, std, &scale), 0);
+    loadid_est_destroy(est);
+    /* Reference: H22 = sum a a^T w over rows a = [A_k row, t_k e_r], and
+     * the force and torque rows' Gram matrices for the sandwich. */
+    enum { N = 16, N2 = 22 };
+    static double H[N2 * N2], G[2][N * N], inv16[N * N], inv22[N2 * N2], work[N2 * N2];
+    double b[N2] = {0}, rss[2] = {0};
+    memset(H, 0, sizeof H);
+    memset(G, 0, sizeof G);
+    for (int k = 0; k < d.n_samples; ++k) {
+        const loadid_real_t *A = dataset_A(&d, k), *y = dataset_y(&d, k);
+        for (int r = 0; r < 6; ++r) {
+            const double w = 1.0 / ((double)cfg.row_sigma[r] * (double)cfg.row_sigma[r]);
+            double a[N2] = {0}, e = y[r];
+            for (int i = 0; i < N; ++i) a[i] = A[r * N + i], e -= a[i] * phi[i];
+            a[N + r] = k * 1e-3;
+            for (int i = 0; i < N2; ++i) {
+                b[i] += w * a[i] * y[r];
+                for (int j = 0; j < N2; ++j) H[i * N2 + j] += w * a[i] * a[j];
+            }
+            for (int i = 0; i < N; ++i)
+                for (int j = 0; j < N; ++j) G[r >= 3][i * N + j] += w * a[i] * a[j];
+            rss[r >= 3] += w * e * e;
+        }
+    }
+    memcpy(work, H, sizeof work);
+    invert(work, N2, inv22);
+    for (int i = 0; i < N; ++i)
+        for (int j = 0; j < N; ++j) work[i * N + j] = H[i * N2 + j];
+    invert(work, N, inv16);
+    double x16[N] = {0}, x22[N2] = {0};
+    for (int i = 0; i < N; ++i)
+        for (int j = 0; j < N; ++j) x16[i] += inv16[i * N + j] * b[j];
+    for (int i = 0; i < N2; ++i)
+        for (int j = 0; j < N2; ++j) x22[i] += inv22[i * N2 + j] * b[j];
+    const double half = (6.0 * d.n_samples - N) / 2, s2[2] = {rss[0] / half, rss[1] / half};
+    double worst = 0, share_max = 0, drift_worst = 0;
+    for (int j = 0; j < 6; ++j) drift_worst = fmax(drift_worst, fabs(x22[N + j] - drift[j]));
+    for (int i = 0; i < 10; ++i) {
+        double var = 0;
+        for (int a = 0; a < N; ++a)
+            for (int c = 0; c < N; ++c)
+                var += inv16[i * N + a] * (s2[0] * G[0][a * N + c] + s2[1] * G[1][a * N + c]) *
+                       inv16[c * N + i];
+        const double wit = (x16[i] - x22[i]) * (x16[i] - x22[i]);
+        worst = fmax(worst, fabs((double)std[i] * std[i] - var - wit) / (var + wit));
+        share_max = fmax(share_max, wit / (var + wit));
+    }
+    print_message(
+        "drift witness: its share of the variance up to %.2f; std^2 against the sandwich "
+        "plus d^2: worst relative difference %.2e; the 22-column fit's drift within %.3f\n",
+        share_max, worst, drift_worst);
+    assert_true(worst < 1e-6);
+    assert_true(share_max > 0.5); /* the drift dominates here */
+    assert_true(drift_worst < 0.02);
+    dataset_free(&d);
+}
+
 /* Coverage of |error| <= 2 std per parameter over kSeeds data sets; rows
  * weighted with the true wrench noise when the data matrix is exact. */
 static void coverage(loadid_method_t method, const loadid_synth_noise_t *noise, double cover[10],
@@ -480,6 +563,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ls_std_equals_normal_equations),
         cmocka_unit_test(test_ls_coverage_noise_in_y),
+        cmocka_unit_test(test_drift_witness_equals_least_squares),
         cmocka_unit_test(test_tls_coverage_noise_in_a),
         cmocka_unit_test(test_riv_coverage_noise_in_a),
         cmocka_unit_test(test_zeroing_noise_refused),
