@@ -165,17 +165,16 @@ class Excitation {
     struct DriftSums {
         Eigen::Matrix<double, LOADID_NROWS, N> cross; // sum_k t_k D A_k T1
         Eigen::Matrix<double, LOADID_NROWS, 1> y;     // sum_k t_k D y_k
-        double t = 0, tt = 0;                         // sum_k t_k, sum_k t_k^2
+        double tt = 0;                                // sum_k t_k^2
         double k = 0;                                 // samples
         void reset() {
             cross.setZero();
             y.setZero();
-            t = tt = k = 0;
+            tt = k = 0;
         }
         void forget(double f) {
             cross *= f;
             y *= f;
-            t *= f;
             tt *= f;
         }
         template <class Weighted>
@@ -185,7 +184,6 @@ class Excitation {
                 for (int j = 0; j < N; ++j) cross(r, j) += tk * double(w(r, j));
                 y(r) += tk * double(w(r, N));
             }
-            t += tk;
             tt += tk * tk;
             k += 1;
         }
