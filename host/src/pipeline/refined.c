@@ -289,34 +289,58 @@ static int64_t kinematics(loadid_refined_t *r, const loadid_jf_config_t *jf) {
     return kinematics_at(r, count, 0);
 }
 
-/* The weighted residual of a least-squares fit on the stored kinematics
- * (rows weighted by force_sigma, torque_sigma), by the normal equations;
- * +Inf when they are singular. rss_group (may be NULL): the force and the
- * torque rows' unweighted residual sums of squares. */
-static double fit_residual(const loadid_refined_t *r, int n_params, const loadid_real_t g_init[3],
-                           double force_sigma, double torque_sigma, double rss_group[2],
-                           double phi_out[16]) {
-    const int n = n_params;
-    double M[16 * 16] = {0}, b[16] = {0}, yy = 0;
+/* The normal equations of a weighted least-squares fit on the stored
+ * kinematics (rows weighted by force_sigma, torque_sigma): M (lower
+ * triangle, row-major, cols x cols) and b summed, *yy = y^T W y; cols is
+ * n_params, or n_params + 6 with columns (t - t_mid) E6 of the offset's
+ * drift. Returns the rows summed. */
+#define MAX_COLS (LOADID_NPHI_OFFSET + 6)
+static double normal_equations(const loadid_refined_t *r, int n_params, int cols,
+                               const loadid_real_t g_init[3], double force_sigma,
+                               double torque_sigma, int64_t t_mid, double *M, double *b,
+                               double *yy) {
+    memset(M, 0, (size_t)cols * (size_t)cols * sizeof *M);
+    memset(b, 0, (size_t)cols * sizeof *b);
+    double rows = 0;
+    *yy = 0;
     for (int i = 0; i < r->scount; ++i) {
         if (!r->kin_ok[i]) continue;
         const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
         loadid_real_t A[6 * 16];
-        if (loadid_regressor_model(k, k + 3, k + 6, n, g_init, A)) continue;
+        if (loadid_regressor_model(k, k + 3, k + 6, n_params, g_init, A)) continue;
+        const double dt = (double)(r->s[i].t - t_mid) * 1e-6;
         for (int row = 0; row < 6; ++row) {
             const double w = 1.0 / sq(row < 3 ? force_sigma : torque_sigma);
             const double y = (double)r->s[i].y[row];
-            const loadid_real_t *a = A + row * n;
-            for (int p = 0; p < n; ++p) {
+            double a[MAX_COLS];
+            for (int p = 0; p < n_params; ++p) a[p] = (double)A[row * n_params + p];
+            for (int p = n_params; p < cols; ++p) a[p] = p - n_params == row ? dt : 0;
+            for (int p = 0; p < cols; ++p) {
                 if (a[p] == 0) continue;
                 b[p] += w * a[p] * y;
-                for (int q = 0; q <= p; ++q) M[p * n + q] += w * a[p] * a[q];
+                for (int q = 0; q <= p; ++q) M[p * cols + q] += w * a[p] * a[q];
             }
-            yy += w * y * y;
+            *yy += w * y * y;
+            rows += 1;
         }
     }
+    return rows;
+}
+
+/* The weighted residual of a least-squares fit on the stored kinematics
+ * (rows weighted by force_sigma, torque_sigma), by the normal equations;
+ * +Inf when they are singular. rss_group (may be NULL): the force and the
+ * torque rows' unweighted residual sums of squares; normal (may be NULL):
+ * the normal matrix A^T W A (n x n, full, row-major). */
+static double fit_residual(const loadid_refined_t *r, int n_params, const loadid_real_t g_init[3],
+                           double force_sigma, double torque_sigma, double rss_group[2],
+                           double phi_out[16], double normal[16 * 16]) {
+    const int n = n_params;
+    double M[16 * 16], b[16], yy;
+    normal_equations(r, n, n, g_init, force_sigma, torque_sigma, 0, M, b, &yy);
     for (int p = 0; p < n; ++p)
         for (int q = 0; q < p; ++q) M[q * n + p] = M[p * n + q];
+    if (normal) memcpy(normal, M, (size_t)n * (size_t)n * sizeof *M);
     double x[16];
     memcpy(x, b, sizeof x);
     if (spd_solve(M, x, n)) return INFINITY;
@@ -360,11 +384,11 @@ static delay_step_t delay_step(const loadid_refined_t *r, int n_params,
                                double torque_sigma) {
     const int n = n_params;
     delay_step_t out = {0, INFINITY};
-    double x[16];
-    if (!isfinite(fit_residual(r, n, g_init, force_sigma, torque_sigma, NULL, x))) return out;
+    double x[16], M[16 * 16];
+    if (!isfinite(fit_residual(r, n, g_init, force_sigma, torque_sigma, NULL, x, M))) return out;
     loadid_real_t phi[16];
     for (int p = 0; p < n; ++p) phi[p] = (loadid_real_t)x[p];
-    double M[16 * 16] = {0}, g[16] = {0}, cc = 0;
+    double g[16] = {0}, cc = 0;
     double block_cr[DELAY_BLOCKS] = {0}, block_ar[DELAY_BLOCKS][16] = {{0}};
     loadid_real_t A[3][6 * 16], pred[3][6];
     int64_t t[3] = {0, 0, 0};
@@ -394,13 +418,10 @@ static delay_step_t delay_step(const loadid_refined_t *r, int n_params,
                 if (a[p] == 0) continue;
                 g[p] += w * a[p] * c;
                 block_ar[blk][p] += w * a[p] * res;
-                for (int q = 0; q <= p; ++q) M[p * n + q] += w * a[p] * a[q];
             }
         }
     }
-    for (int p = 0; p < n; ++p)
-        for (int q = 0; q < p; ++q) M[q * n + p] = M[p * n + q];
-    double b[16];
+    double b[16]; /* M: fit_residual's A^T W A, over every sample */
     memcpy(b, g, sizeof b);
     if (spd_solve(M, b, n)) return out;
     double J = cc; /* c_p^T W c_p */
@@ -437,8 +458,9 @@ static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t 
                          double force_sigma, double torque_sigma, double *std_us, int *used_it) {
     const int count = r->count;
     /* The kinematics at 0 are in place (the best smoothing's). */
-    const double rss0 = fit_residual(r, n_params, g_init, force_sigma, torque_sigma, NULL, NULL) /
-                        (double)kin_count(r);
+    const double rss0 =
+        fit_residual(r, n_params, g_init, force_sigma, torque_sigma, NULL, NULL, NULL) /
+        (double)kin_count(r);
     double d = 0;
     *std_us = INFINITY;
     for (int it = 0; it < 4; ++it) {
@@ -454,10 +476,10 @@ static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t 
     *used_it = 0;
     if (llabs(delay) >= DELAY_USE_US && (double)llabs(delay) >= DELAY_SIGNIFICANT * *std_us) {
         const int64_t used = kin_count(r);
-        const double rss =
-            used > 1 ? fit_residual(r, n_params, g_init, force_sigma, torque_sigma, NULL, NULL) /
-                           (double)used
-                     : INFINITY;
+        const double rss = used > 1 ? fit_residual(r, n_params, g_init, force_sigma, torque_sigma,
+                                                   NULL, NULL, NULL) /
+                                          (double)used
+                                    : INFINITY;
         if (rss < rss0) {
             *used_it = 1;
             return delay;
@@ -476,42 +498,19 @@ static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t 
  * offset does not fit, moved the COM of a slow motion by 12 to 26 mm
  * (2-3 mm without it) while phi_std said 5. Returns 0, or -1 when the
  * fit is singular. */
-#define DRIFT_COLS (LOADID_NPHI_OFFSET + 6)
 static int fit_drift(const loadid_refined_t *r, const loadid_real_t g_init[3], double force_sigma,
                      double torque_sigma, int64_t t_mid, double drift[6], double extra_var[10]) {
-    enum { N = DRIFT_COLS, N16 = LOADID_NPHI_OFFSET };
-    double M[N * N] = {0}, b[N] = {0}, yy = 0, rows = 0;
-    for (int i = 0; i < r->scount; ++i) {
-        if (!r->kin_ok[i]) continue;
-        const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
-        loadid_real_t A[6 * N16];
-        if (loadid_regressor_model(k, k + 3, k + 6, N16, g_init, A)) continue;
-        const double dt = (double)(r->s[i].t - t_mid) * 1e-6;
-        for (int row = 0; row < 6; ++row) {
-            const double w = 1.0 / sq(row < 3 ? force_sigma : torque_sigma);
-            const double y = (double)r->s[i].y[row];
-            /* The row's non-zero entries, in column order: E6 and the
-             * drift's columns have one each. */
-            int idx[N], nz = 0;
-            double a[N];
-            for (int p = 0; p < N16; ++p)
-                if (A[row * N16 + p] != 0) idx[nz] = p, a[nz++] = (double)A[row * N16 + p];
-            idx[nz] = N16 + row, a[nz++] = dt;
-            for (int u = 0; u < nz; ++u) {
-                b[idx[u]] += w * a[u] * y;
-                for (int v = 0; v <= u; ++v) M[idx[u] * N + idx[v]] += w * a[u] * a[v];
-            }
-            yy += w * y * y;
-            rows += 1;
-        }
-    }
+    enum { N = MAX_COLS, N16 = LOADID_NPHI_OFFSET };
+    double M[N * N], b[N], yy;
+    const double rows =
+        normal_equations(r, N16, N, g_init, force_sigma, torque_sigma, t_mid, M, b, &yy);
     if (!(rows > N + 2)) return -1;
     for (int p = 0; p < N; ++p)
         for (int q = 0; q < p; ++q) M[q * N + p] = M[p * N + q];
-    double L[N * N], L16[N16 * N16], x[N];
-    memcpy(L, M, sizeof L);
+    double L16[N16 * N16], x[N];
     for (int p = 0; p < N16; ++p)
         for (int q = 0; q < N16; ++q) L16[p * N16 + q] = M[p * N + q];
+    double *L = M; /* factored in place */
     if (chol_factor(L, N) || chol_factor(L16, N16)) return -1;
     memcpy(x, b, sizeof x);
     chol_solve(L, x, N);
@@ -553,8 +552,8 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
         jf.jerk_psd = (loadid_real_t)((double)r->jf.jerk_psd * pow(10.0, -trial));
         const int64_t n = kinematics(r, &jf);
         if (n < 2) continue;
-        const double rss =
-            fit_residual(r, n_params, g_init, rep->levels.force, rep->levels.torque, NULL, NULL);
+        const double rss = fit_residual(r, n_params, g_init, rep->levels.force, rep->levels.torque,
+                                        NULL, NULL, NULL);
         if (!(rss < best)) continue;
         best = rss, best_psd = (double)jf.jerk_psd, used = n, best_count = r->count;
         swap_best(r); /* keep this trial's kinematics and smoothed joints */
@@ -603,7 +602,7 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     /* The rows' noise raised by what of a least-squares fit's residual the
      * wrench's noise does not explain, then the TLS fit. */
     double rss[2];
-    fit_residual(r, n_params, g_init, rep->levels.force, rep->levels.torque, rss, NULL);
+    fit_residual(r, n_params, g_init, rep->levels.force, rep->levels.torque, rss, NULL, NULL);
     const double dof = fmax(3.0 * (double)used - n_params / 2.0, 1.0);
     rep->unexplained[0] = sqrt(fmax(rss[0] / dof - sq(rep->levels.force), 0));
     rep->unexplained[1] = sqrt(fmax(rss[1] / dof - sq(rep->levels.torque), 0));
