@@ -185,14 +185,12 @@ int check_joints(const loadid_signals *s, int64_t t_us, int num_joints,
 // One joint state into the filters (its stamp regularised); counted.
 int feed(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *position,
          const loadid_real_t *setpoint) {
-    const int64_t raw = t_us;
     // Everything is checked before either filter changes, so a refused
     // message leaves both exactly as they were.
     int rc = check_joints(s, t_us, num_joints, position, setpoint);
     // The regularised stamp; a loop that has not locked yet may not go
     // backwards in time.
-    const double nominal = double(s->period_us);
-    if (rc == 0) t_us = s->clock.regularise(t_us, nominal, s->cfg.stamp_gain, false);
+    if (rc == 0) t_us = s->clock.propose(t_us, double(s->period_us), s->cfg.stamp_gain);
     if (rc == 0 && (t_us <= loadid_jf_last_time(s->measured) ||
                     (setpoint && t_us <= loadid_jf_last_time(s->setpoint))))
         rc = LOADID_E_TIME_ORDER;
@@ -202,7 +200,7 @@ int feed(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *p
         ++s->stats.joint_msgs_bad;
         return rc;
     }
-    s->clock.regularise(raw, nominal, s->cfg.stamp_gain, true);
+    s->clock.commit();
     ++s->stats.joint_msgs_ok;
     s->piece_ended = false;
     return 0;

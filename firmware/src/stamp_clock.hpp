@@ -31,11 +31,12 @@ class StampClock {
     double period() const { return s_.period; }
 
     // The time to use for t_raw; nominal: the period to start from [us]
-    // (the filters'); commit: take the stamp. gain >= 1: the stamps as
-    // they are, nothing kept.
-    int64_t regularise(int64_t t_raw, double nominal, double gain, bool commit) {
+    // (the filters'). The clock takes the stamp only at commit(), once the
+    // filters have. gain >= 1: the stamps as they are, nothing kept.
+    int64_t propose(int64_t t_raw, double nominal, double gain) {
+        next_ = s_;
         if (gain >= 1) return t_raw;
-        State s = s_;
+        State &s = next_;
         if (s.last_raw == INT64_MIN) {
             start(s, t_raw, nominal);
         } else if (s.n > 0) {
@@ -44,9 +45,9 @@ class StampClock {
             track(s, t_raw, gain);
         }
         s.last_raw = t_raw;
-        if (commit) s_ = s;
         return int64_t(std::llround(s.t));
     }
+    void commit() { s_ = next_; }
 
   private:
     struct State {
@@ -114,7 +115,7 @@ class StampClock {
         }
     }
 
-    State s_;
+    State s_, next_;
 };
 
 } // namespace loadid
