@@ -65,7 +65,7 @@ extern "C" int loadid_gram_tls_estimate(const loadid_gram_tls_t *g, loadid_real_
     const Real ratio = s(N - 1) > 0 ? s(N) / s(N - 1) : Real(1);
     Eigen::Map<loadid::Vec<N>> out(phi);
     out.setZero();
-    const int gate = loadid::excitation_gate(g->excitation, ratio, g->cfg, g->samples, info);
+    const int gate = loadid::excitation_gate(g->excitation, ratio, g->cfg, g->samples, info, true);
     if (info) info->sigma_min = s(N);
     if (gate) return gate;
     const loadid::TlsSolution<N> sol = loadid::tls_solution<N>(W, s, g->t, g->cfg.rtls_eps);

@@ -78,11 +78,11 @@ class Batch final : public loadid_est {
         return 0;
     }
 
-    int estimate(Real *phi, loadid_est_info_t *info) const override {
+    int estimate(Real *phi, loadid_est_info_t *info, bool ratio_gate) const override {
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
         const int gate = excitation_gate(excitation_, excitation_.noise_ratio(col_exact<N>(cfg)),
-                                         cfg, samples_, info);
+                                         cfg, samples_, info, ratio_gate);
         if (gate) return gate;
         if (samples_ < 2) return LOADID_E_NOT_EXCITED;
 

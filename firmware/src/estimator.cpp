@@ -8,6 +8,7 @@
 #include <new>
 
 #include "estimator_factory.hpp"
+#include "excitation.hpp"
 #include "finite.hpp"
 
 using namespace loadid;
@@ -258,7 +259,13 @@ extern "C" int loadid_est_update(loadid_est_t *est, const loadid_real_t *A, cons
 extern "C" int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi,
                                    loadid_est_info_t *info) {
     if (!est || !phi) return -EINVAL;
-    return est->estimate(phi, info);
+    return est->estimate(phi, info, true);
+}
+
+extern "C" int loadid_est_estimate_unique(const loadid_est_t *est, loadid_real_t *phi,
+                                          loadid_est_info_t *info) {
+    if (!est || !phi) return -EINVAL;
+    return est->estimate(phi, info, loadid::solution_needs_ratio(est->cfg));
 }
 
 extern "C" int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real_t *phi,

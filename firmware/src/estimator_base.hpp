@@ -26,7 +26,9 @@ struct loadid_est {
     // Inputs are checked (non-NULL, finite) by the C API before this call;
     // an implementation returns 0 or LOADID_E_FULL without changing state.
     virtual int update(const loadid_real_t *A, const loadid_real_t *C, const loadid_real_t *y) = 0;
-    virtual int estimate(loadid_real_t *phi, loadid_est_info_t *info) const = 0;
+    // ratio_gate false: without the noise-ratio test (the C API's
+    // loadid_est_estimate_unique decides when).
+    virtual int estimate(loadid_real_t *phi, loadid_est_info_t *info, bool ratio_gate) const = 0;
     // The information matrix the excitation gate keeps, and this method's
     // kind of covariance, for phi (may be NULL): uncertainty.hpp computes
     // phi_std, the groups' signal-to-noise and the weakest direction from

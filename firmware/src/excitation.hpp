@@ -320,13 +320,28 @@ inline Real noise_ratio_bound(const loadid_est_config_t &cfg, int64_t samples) {
     return std::min(cfg.max_noise_ratio, Real(1) - Real(2) * gamma);
 }
 
+// Whether the solution itself needs the noise-ratio gate: TLS with a
+// regressor column it counts as noisy has no unique solution when
+// sigma_{n+1} ~ sigma_n (Golub & Van Loan), and its estimate then swings in
+// every parameter. Least squares, and TLS with every regressor column
+// counted exact (the mixed LS-TLS limit: least squares), are unique
+// whenever the condition number passes; a direction that does not stand
+// out of the noise is then only uncertain, which phi_std says
+// (loadid_est_estimate_unique).
+inline bool solution_needs_ratio(const loadid_est_config_t &cfg) {
+    if (cfg.method != LOADID_METHOD_RTLS && cfg.method != LOADID_METHOD_TLS_BATCH) return false;
+    for (int j = 0; j < LOADID_NPHI; ++j)
+        if (!(cfg.col_exact[j] > 1)) return true;
+    return false;
+}
+
 // The excitation gate shared by every method: fills the info fields it
 // owns and returns 0 or LOADID_E_NOT_EXCITED. ratio is sigma_{n+1}/sigma_n
 // of D [A y] (T / col_exact): Excitation::noise_ratio(), or RTLS's from its
-// own singular values.
+// own singular values; ratio_gate false: reported, not tested.
 template <int N>
 inline int excitation_gate(const Excitation<N> &ex, Real ratio, const loadid_est_config_t &cfg,
-                           int64_t samples, loadid_est_info_t *info) {
+                           int64_t samples, loadid_est_info_t *info, bool ratio_gate) {
     const Real kappa = ex.condition(col_exact<N>(cfg));
     if (info) {
         *info = loadid_est_info_t{};
@@ -335,7 +350,7 @@ inline int excitation_gate(const Excitation<N> &ex, Real ratio, const loadid_est
         info->noise_ratio = ratio;
     }
     if (!(kappa <= cfg.max_condition)) return LOADID_E_NOT_EXCITED;
-    if (cfg.max_noise_ratio < 1 && !(ratio <= noise_ratio_bound<N>(cfg, samples)))
+    if (ratio_gate && cfg.max_noise_ratio < 1 && !(ratio <= noise_ratio_bound<N>(cfg, samples)))
         return LOADID_E_NOT_EXCITED;
     return 0;
 }

@@ -66,11 +66,11 @@ class RecursiveLs final : public loadid_est {
         return 0;
     }
 
-    int estimate(Real *phi, loadid_est_info_t *info) const override {
+    int estimate(Real *phi, loadid_est_info_t *info, bool ratio_gate) const override {
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
         const int rc = excitation_gate(excitation_, excitation_.noise_ratio(col_exact<N>(cfg)), cfg,
-                                       samples_, info);
+                                       samples_, info, ratio_gate);
         if (rc) return rc;
         // RIV keeps M and b (information form): its phi is solved here,
         // when asked for, not after every sample.

@@ -118,11 +118,12 @@ class Rtls final : public loadid_est {
         return 0;
     }
 
-    int estimate(Real *phi, loadid_est_info_t *info) const override {
+    int estimate(Real *phi, loadid_est_info_t *info, bool ratio_gate) const override {
         apply_pending();
         Eigen::Map<Vec<N>> out(phi);
         out.setZero();
-        const int gate = excitation_gate(excitation_, noise_ratio(), cfg, samples_, info);
+        const int gate =
+            excitation_gate(excitation_, noise_ratio(), cfg, samples_, info, ratio_gate);
         if (info) {
             info->sigma_min = rank_ == N1 ? s_(N) : Real(0);
             info->reorthogonalisations = reorth_;

@@ -218,6 +218,26 @@ def test_slow_motion_claims_only_what_it_got_right(tmp_path, robot, seed):
         assert np.linalg.norm(np.array(refined["model"]["com"]) - c_t) < 0.015, refined["model"]
 
 
+def test_slow_motion_gives_the_mass_where_only_the_weakest_direction_is_noise(tmp_path):
+    """UR5, seed 2 of the real-data-like case: the inertia and the offset do
+    not stand out of the noise (noise ratio 0.955 over the gate's 0.91),
+    and the gate refused RTLS, RIV and RLS as "not excited" though the
+    mass stands out (REFINED: 0.55 % off, std 0.9 %). Their solution is
+    least squares (the joint filter's columns count as exact), unique
+    whatever the ratio, so at DONE they are published for what phi_std
+    identifies: the mass (seen 1.5 %, 1.3 % and 1.5 % off at std 0.9 %),
+    not the inertia."""
+    rec, result = real_data_like(tmp_path, f"robot:\n  urdf: {UR5}\n", 2)
+    phi, _ = truth_phi(rec)
+    m_t = phi[0]
+    assert_no_inertia_claimed(result)
+    for est in result[:3]:  # RTLS, RIV, RLS
+        assert "error" not in est, est
+        assert "mass" in est["identified"], (est["method"], est["identified"], est["phi_std"])
+        assert abs(est["model"]["mass"] - m_t) / m_t < 0.05, (est["method"], est["model"])
+        assert abs(est["mass"] - m_t) <= 3 * est["phi_std"][0], (est["mass"], est["phi_std"])
+
+
 def test_tls_on_joint_filter_columns_is_not_biased_by_the_misfit(trajectory, tmp_path):
     """A 2 kg box at low F/T noise (0.03 N, 0.0015 N m): the wrench's misfit
     is about 8-10 times its measured noise (what the motor-side encoders see
@@ -297,7 +317,7 @@ def test_not_excited_says_what_is_missing(trajectory, tmp_path):
     for r in result:
         assert r["identified"] == [] and r["error"].startswith("not excited: "), r["error"]
         assert "1500 samples" in r["error"] and "too few" not in r["error"]
-        assert "stands out of the noise" in r["error"] or "does not determine" in r["error"]
+        assert "stand out of the noise" in r["error"] or "does not determine" in r["error"]
 
 
 @pytest.mark.parametrize("signals", ["sensor", "kf", "setpoint", "mixed"])

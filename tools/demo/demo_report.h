@@ -20,7 +20,7 @@
 /* One method's final estimate of one run, with its errors. */
 typedef struct {
     int valid;
-    char why[160]; /* when !valid */
+    char why[256]; /* when !valid */
     int64_t samples;
     double phi[10];          /* the load (distal part removed) */
     double err[10];          /* eq. (37): |x - x_true| / |x_true| [%] */

@@ -239,6 +239,19 @@ int loadid_est_update(loadid_est_t *est, const loadid_real_t *A, const loadid_re
  * phi never holds NaN or Inf. */
 int loadid_est_estimate(const loadid_est_t *est, loadid_real_t *phi, loadid_est_info_t *info);
 
+/* The estimate as loadid_est_estimate gives it, but with the noise-ratio
+ * test only where the solution needs it: RTLS and TLS_BATCH with a
+ * regressor column counted noisy (col_exact[j] <= 1 for a j < 10), whose
+ * TLS solution is not unique when sigma_{n+1} ~ sigma_n. Least squares
+ * (RLS, RIV, LS_BATCH) and TLS with every regressor column counted exact
+ * are unique once the condition number passes: a direction that does not
+ * stand out of the noise (the inertia, or the offset, on slow motion) is
+ * then only uncertain, and loadid_est_uncertainty says how much. For a
+ * caller that judges the groups from phi_std (the final estimate, with
+ * loadid_load_model). Same returns as loadid_est_estimate. */
+int loadid_est_estimate_unique(const loadid_est_t *est, loadid_real_t *phi,
+                               loadid_est_info_t *info);
+
 /* One standard deviation of each element of phi, this estimator's own
  * estimate (as loadid_est_estimate gave it), from its covariance on the
  * weighted data: RLS and LS_BATCH s^2 (A^T W A)^-1 (Sigma of eq. 17); RIV

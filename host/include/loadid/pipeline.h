@@ -70,7 +70,7 @@ typedef struct {
     int physically_consistent;
     int valid;     /* 0: no estimate yet (error says why) */
     int error;     /* the core's code when !valid */
-    char why[160]; /* when !valid: what is missing, in words */
+    char why[256]; /* when !valid: what is missing, in words */
     /* Filled in the final estimate (DONE) only, load_model_t's fields
      * (phi_std also in every valid estimate after
      * loadid_pipeline_std_always): */
