@@ -29,6 +29,14 @@ extern "C" int loadid_regressor_add_zeroing(const loadid_real_t g_init[3],
     return 0;
 }
 
+extern "C" int loadid_regressor_subtract_zeroing(const loadid_real_t A0[6 * 10],
+                                                 loadid_real_t A[6 * 10]) {
+    if (!A0 || !A) return -EINVAL;
+    if (!all_finite(A0, LOADID_NROWS * LOADID_NPHI)) return LOADID_E_NONFINITE;
+    Eigen::Map<Regressor<10>>(A) -= ConstRegressorMap<10>(A0);
+    return 0;
+}
+
 extern "C" int loadid_regressor_with_offset(const loadid_real_t A[6 * 10],
                                             loadid_real_t A16[6 * 16]) {
     if (!A || !A16) return -EINVAL;

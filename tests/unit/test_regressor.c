@@ -264,6 +264,56 @@ static void test_zeroing_matches_zeroed_wrench(void **state) {
         N_RANDOM_STATES, worst);
 }
 
+/* loadid_regressor_subtract_zeroing: a load that moved while it was
+ * zeroed. Over a window of 50 random motions the zeroed wrench of another
+ * motion, w - mean(w) (eqs. 1-2 evaluated directly, tools/synth), is
+ * (A - A0) phi with A0 the window's mean regressor; a still window gives
+ * loadid_regressor_add_zeroing's A. */
+static void test_zeroing_while_moving(void **state) {
+    (void)state;
+    loadid_rng_t rng;
+    loadid_rng_seed(&rng, 0x5EED0011ULL);
+    for (int trial = 0; trial < 200; ++trial) {
+        double phi[10], a0[60] = {0}, w0[6] = {0}, A[60], w[6], y[6];
+        random_load_phi(&rng, phi);
+        loadid_motion_t m;
+        for (int k = 0; k < 50; ++k) {
+            random_state(&rng, &m);
+            loadid_synth_wrench(phi, &m, w);
+            assert_int_equal(loadid_regressor(m.spec, m.omega, m.alpha, A), 0);
+            for (int i = 0; i < 60; ++i) a0[i] += A[i] / 50;
+            for (int i = 0; i < 6; ++i) w0[i] += w[i] / 50;
+        }
+        random_state(&rng, &m);
+        loadid_synth_wrench(phi, &m, w);
+        assert_int_equal(loadid_regressor(m.spec, m.omega, m.alpha, A), 0);
+        assert_int_equal(loadid_regressor_subtract_zeroing(a0, A), 0);
+        assert_int_equal(loadid_regressor_apply(A, 10, phi, y), 0);
+        const double scale = fmax(1.0, fmax(max_abs(w, 6), max_abs(w0, 6)));
+        for (int i = 0; i < 6; ++i) ASSERT_CLOSE(y[i], w[i] - w0[i], REL_TOL * scale, "moving");
+
+        /* At rest the window's mean is A(-g_init, 0, 0). */
+        double g[3], still[60], zero[3] = {0, 0, 0}, spec[3], B[60];
+        random_gravity(&rng, g);
+        for (int i = 0; i < 3; ++i) spec[i] = -g[i];
+        assert_int_equal(loadid_regressor(spec, zero, zero, still), 0);
+        assert_int_equal(loadid_regressor(m.spec, m.omega, m.alpha, A), 0);
+        memcpy(B, A, sizeof B);
+        assert_int_equal(loadid_regressor_subtract_zeroing(still, A), 0);
+        assert_int_equal(loadid_regressor_add_zeroing(g, B), 0);
+        for (int i = 0; i < 60; ++i)
+            ASSERT_CLOSE(A[i], B[i], REL_TOL * fmax(1.0, fabs(B[i])), "rest");
+    }
+    double A[60], bad[60] = {0}, untouched[60];
+    bad[7] = NAN;
+    memset(A, 0x5a, sizeof A);
+    memcpy(untouched, A, sizeof A);
+    assert_int_equal(loadid_regressor_subtract_zeroing(NULL, A), -EINVAL);
+    assert_int_equal(loadid_regressor_subtract_zeroing(bad, NULL), -EINVAL);
+    assert_int_equal(loadid_regressor_subtract_zeroing(bad, A), LOADID_E_NONFINITE);
+    assert_memory_equal(A, untouched, sizeof A);
+}
+
 /* loadid_regressor_model: each of its three models against eqs. (1)-(2)
  * evaluated directly (tools/synth): the plain wrench, the zeroed wrench
  * (eqs. 7-9), and the wrench plus an offset ([A E6]). */
@@ -562,6 +612,7 @@ int main(void) {
         cmocka_unit_test(test_zeroing_entries_match_paper_eq7),
         cmocka_unit_test(test_offset_model),
         cmocka_unit_test(test_model_matches_each_wrench),
+        cmocka_unit_test(test_zeroing_while_moving),
         cmocka_unit_test(test_regressor_rejects_nonfinite),
         cmocka_unit_test(test_regressor_rejects_null),
         cmocka_unit_test(test_zeroing_rejects_nonfinite),

@@ -27,6 +27,7 @@
 #include <cmocka.h>
 
 #include "loadid/estimator.h"
+#include "loadid/regressor.h"
 #include "save_worker.h"
 #include "saved_result.h"
 #include "scratch_dir.h"
@@ -59,6 +60,7 @@ static void estimate(int k, loadid_pipeline_estimate_t *e, loadid_pipeline_compe
     for (int i = 0; i < 10; ++i) c->phi_total[i] = e->phi[i] + 1;
     c->zeroed = 1;
     c->g_init[2] = 9.81;
+    for (int i = 0; i < 60; ++i) c->zero_a[i] = k - 0.01 * i;
 }
 
 static void check_saved(const char *msg, int k) {
@@ -74,6 +76,41 @@ static void check_saved(const char *msg, int k) {
     assert_true(back.utime == e.utime);
     assert_memory_equal(back.phi, e.phi, sizeof e.phi);
     assert_memory_equal(cback.phi_total, c.phi_total, sizeof c.phi_total);
+    assert_memory_equal(cback.zero_a, c.zero_a, sizeof c.zero_a);
+}
+
+/* A saved result without zero_regressor (written before it was saved)
+ * was zeroed at rest: eq. (6) there, A(-g_init, 0, 0), comes back. */
+static void zeroing_regressor_defaults_to_rest(void **state) {
+    (void)state;
+    loadid_pipeline_estimate_t e, back;
+    loadid_pipeline_compensation_t c, cback;
+    estimate(5, &e, &c);
+    c.g_init[0] = 1.0, c.g_init[1] = -2.0, c.g_init[2] = -9.5;
+    char path[256], old[160], err[512];
+    snprintf(old, sizeof old, "%s/without.yaml", g_dir);
+    assert_int_equal(loadid_saved_result_write(g_dir, &e, &c, path, sizeof path, err, sizeof err),
+                     0);
+    FILE *in = fopen(path, "r"), *out = fopen(old, "w");
+    assert_non_null(in);
+    assert_non_null(out);
+    char line[4096];
+    int dropped = 0;
+    while (fgets(line, sizeof line, in))
+        if (strstr(line, "zero_regressor:"))
+            dropped++;
+        else
+            fputs(line, out);
+    fclose(in);
+    fclose(out);
+    assert_int_equal(dropped, 1);
+    assert_int_equal(loadid_saved_result_read(path, &back, &cback, err, sizeof err), 0);
+    assert_memory_equal(cback.zero_a, c.zero_a, sizeof c.zero_a);
+    assert_int_equal(loadid_saved_result_read(old, &back, &cback, err, sizeof err), 0);
+    const loadid_real_t spec[3] = {-1.0, 2.0, 9.5}, zero[3] = {0, 0, 0};
+    loadid_real_t a[60];
+    assert_int_equal(loadid_regressor(spec, zero, zero, a), 0);
+    for (int i = 0; i < 60; ++i) assert_true(cback.zero_a[i] == (double)a[i]);
 }
 
 static void saves_in_order(void **state) {
@@ -171,6 +208,7 @@ int main(void) {
         cmocka_unit_test_setup_teardown(saves_in_order, make_dir, remove_dir),
         cmocka_unit_test_setup_teardown(failure_comes_back_as_the_reason, make_dir, remove_dir),
         cmocka_unit_test_setup_teardown(stalled_disk_does_not_hold_up_submit, make_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(zeroing_regressor_defaults_to_rest, make_dir, remove_dir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

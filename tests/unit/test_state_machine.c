@@ -21,6 +21,7 @@
 
 #include "loadid/config.h"
 #include "loadid/pipeline.h"
+#include "loadid/regressor.h"
 #include "loadid/urdf.h"
 
 enum {
@@ -281,6 +282,11 @@ static void restore(loadid_pipeline_t *p) {
     memcpy(c.phi_total, phi, sizeof phi);
     c.zeroed = 1;
     c.g_init[2] = -9.81;
+    /* zeroed at rest: eq. (6) there is A(-g_init, 0, 0) */
+    const loadid_real_t spec[3] = {0, 0, 9.81}, zero[3] = {0, 0, 0};
+    loadid_real_t a[60];
+    assert_int_equal(loadid_regressor(spec, zero, zero, a), 0);
+    for (int i = 0; i < 60; ++i) c.zero_a[i] = (double)a[i];
     assert_int_equal(loadid_pipeline_restore(p, &e, &c), 0);
 }
 

@@ -33,6 +33,15 @@ int loadid_regressor(const loadid_real_t spec[3], const loadid_real_t omega[3],
  * Returns 0, -EINVAL, or LOADID_E_NONFINITE (A untouched). */
 int loadid_regressor_add_zeroing(const loadid_real_t g_init[3], loadid_real_t A[6 * 10]);
 
+/* Eqs. (7)-(9) for a load that may move while it is zeroed: A - A0, A0
+ * the mean of eq. (6) over the zeroing window, where the mean wrench is
+ * A0 phi plus the offset. At rest A0 = A(-g_init, 0, 0), and this is
+ * loadid_regressor_add_zeroing; a load turning while it was zeroed (no
+ * still phase) has a mean acceleration, alpha and omega^2 there that
+ * A(-g_init, 0, 0) lacks. A, A0: 6x10 row-major; A in place.
+ * Returns 0, -EINVAL, or LOADID_E_NONFINITE (A untouched). */
+int loadid_regressor_subtract_zeroing(const loadid_real_t A0[6 * 10], loadid_real_t A[6 * 10]);
+
 /* Widens a 6x10 regressor into the 16-parameter model [A E6] (6x16,
  * row-major) whose last six parameters are the sensor offset [o_f; o_tau],
  * so no zeroing is needed. A and A16 must not overlap.

@@ -61,6 +61,11 @@ typedef struct {
     double d3[LOADID_NOISE_D3_RING][LOADID_NOISE_CHANNELS];
     int d3_n, d3_head;
     double scratch[LOADID_NOISE_STILL_MAX]; /* for the medians */
+    /* The load moved in the still window (loadid_noise_acc_moved): its
+     * statistics are then those of what a cubic in time leaves, per
+     * channel (trend: the cubics' coefficients). */
+    int moved;
+    double trend[LOADID_NOISE_CHANNELS][4];
 } loadid_noise_acc_t;
 
 /* The levels the estimators use (standard deviations). */
@@ -86,6 +91,15 @@ void loadid_noise_acc_still(loadid_noise_acc_t *a, const double x[LOADID_NOISE_C
  * a step over 3 nominal periods (period_us) restarts the history. */
 void loadid_noise_acc_moving(loadid_noise_acc_t *a, int64_t t_us, int64_t period_us,
                              const double x[LOADID_NOISE_CHANNELS]);
+/* The load moved while it was zeroed (no still phase): the window's
+ * wrench then varies with the motion as well, slowly against the noise,
+ * and the still window's figures below become those of each channel less
+ * its least-squares cubic in time over the window. Only on evidence of
+ * motion: a cubic over the window would also take in the slow part of a
+ * low-pass filtered sensor's noise, which sets the zeroing offset's error.
+ * Cleared by loadid_noise_acc_reset_still. */
+void loadid_noise_acc_moved(loadid_noise_acc_t *a);
+
 /* Per-channel standard deviations: the still window when it has at least
  * min_still samples, else the third differences when they have 100, else
  * 0; returns the source (LOADID_NOISE_STILL / _DIFFERENCES / _FALLBACK).

@@ -224,12 +224,13 @@ int loadid_pipeline_estimates(const loadid_pipeline_t *p, loadid_pipeline_estima
 
 /* What compensating the wrench takes, besides the estimate: phi of load
  * and distal part together (and the offset, for 16 parameters), and the
- * zeroing (y0: the wrench averaged at zeroing, g_init: gravity in S then). */
+ * zeroing (y0: the wrench averaged at zeroing, g_init: gravity in S then,
+ * zero_a: eq. (6) averaged then, loadid_regressor_subtract_zeroing). */
 typedef struct {
     int n_params; /* 10 (zeroing) or 16 ([A E6]) */
     double phi_total[16];
     int zeroed;
-    double y0[6], g_init[3];
+    double y0[6], g_init[3], zero_a[60];
 } loadid_pipeline_compensation_t;
 
 /* The primary estimate and its compensation, once DONE: the method whose

@@ -98,12 +98,13 @@ void loadid_refined_sample(loadid_refined_t *r, int64_t t_us, const loadid_real_
 /* Runs the refinement into est (a TLS batch estimator with room for the
  * window; it is re-weighted and reset first): has_accel says whether lin
  * and ang are real; channel/channel_source the measured wrench and
- * accelerometer noise (noise_model.h); g_init and n_params the regressor's
- * model. Returns 0 or a negative code (no samples: LOADID_E_NOT_EXCITED;
+ * accelerometer noise (noise_model.h); n_params the regressor's model,
+ * zero_a (6 x 10, n_params 10) eq. (6) averaged over the zeroing window
+ * (loadid_regressor_subtract_zeroing). Returns 0 or a negative code (no samples: LOADID_E_NOT_EXCITED;
  * joints missing around the window: LOADID_E_NO_DATA). */
 int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_accel,
                        const double channel[LOADID_NOISE_CHANNELS], int channel_source,
-                       const loadid_real_t g_init[3], int n_params, loadid_est_t *est,
+                       const loadid_real_t *zero_a, int n_params, loadid_est_t *est,
                        loadid_refined_report_t *rep);
 
 #ifdef __cplusplus

@@ -95,6 +95,8 @@ static void format_doc(doc_t *d, const loadid_pipeline_estimate_t *e,
     list(d, c->y0, 6);
     add(d, "\n  g_init: ");
     list(d, c->g_init, 3);
+    add(d, "\n  zero_regressor: ");
+    list(d, c->zero_a, 60);
     /* URDF <inertial>: origin at the COM, inertia about it in S's axes; the
      * physically consistent model when there is one (a simulator or a
      * controller refuses an impossible inertia). */
@@ -153,7 +155,7 @@ int loadid_saved_result_write(const char *dir, const loadid_pipeline_estimate_t 
     char name[4400], latest[4400];
     loadid_saved_result_name(dir, est->load_name, est->utime, ".yaml", name, sizeof name);
     snprintf(latest, sizeof latest, "%s/latest.yaml", dir);
-    char text[8192]; /* about 3.5 kB: 84 numbers of up to 24 characters, the name, the text */
+    char text[8192]; /* about 5 kB: 144 numbers of up to 24 characters, the name, the text */
     doc_t d = {text, sizeof text, 0, 0};
     format_doc(&d, est, comp);
     int rc = d.over ? -EOVERFLOW : 0;
@@ -220,6 +222,16 @@ static int read_doc(loadid_yaml_doc_t *doc, loadid_pipeline_estimate_t *e,
         (rc = need(loadid_yaml_get_doubles(comp, "y0", c->y0, 6), comp, "y0")) ||
         (rc = need(loadid_yaml_get_doubles(comp, "g_init", c->g_init, 3), comp, "g_init")))
         return rc;
+    /* Eq. (6) averaged at zeroing; a file without it was zeroed at rest,
+     * where that is A(-g_init, 0, 0). */
+    if ((rc = loadid_yaml_get_doubles(comp, "zero_regressor", c->zero_a, 60)) < 0) return rc;
+    if (rc == 0) {
+        loadid_real_t spec[3], zero[3] = {0, 0, 0}, a[60];
+        for (int i = 0; i < 3; ++i) spec[i] = (loadid_real_t)-c->g_init[i];
+        if (loadid_regressor(spec, zero, zero, a) != 0)
+            return loadid_yaml_fail(loadid_yaml_get(comp, "g_init"), "not finite");
+        for (int i = 0; i < 60; ++i) c->zero_a[i] = (double)a[i];
+    }
     /* The model is read back for what it is used for (its values);
      * phi_std and identified are for people and other programs. */
     loadid_yaml_node_t *model = NULL;

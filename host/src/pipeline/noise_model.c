@@ -18,6 +18,49 @@ void loadid_noise_acc_reset(loadid_noise_acc_t *a) {
 
 void loadid_noise_acc_reset_still(loadid_noise_acc_t *a) {
     a->still_n = 0;
+    a->moved = 0;
+}
+
+/* x of still row k in [-1, 1] (the cubic's variable). */
+static double still_x(const loadid_noise_acc_t *a, int k) {
+    return a->still_n > 1 ? (2.0 * k - (a->still_n - 1)) / (a->still_n - 1) : 0.0;
+}
+
+/* Channel i of still row k, less its cubic when the load moved. */
+static double still_value(const loadid_noise_acc_t *a, int k, int i) {
+    if (!a->moved) return a->still[k][i];
+    const double x = still_x(a, k);
+    const double *c = a->trend[i];
+    return a->still[k][i] - (c[0] + x * (c[1] + x * (c[2] + x * c[3])));
+}
+
+void loadid_noise_acc_moved(loadid_noise_acc_t *a) {
+    a->moved = 0;
+    const int n = a->still_n;
+    if (n < 8) return;
+    /* Normal equations of the cubic, the same for every channel. */
+    double m[4][4] = {{0}}, b[LOADID_NOISE_CHANNELS][4] = {{0}};
+    for (int k = 0; k < n; ++k) {
+        const double x = still_x(a, k), p[4] = {1, x, x * x, x * x * x};
+        for (int r = 0; r < 4; ++r) {
+            for (int s = 0; s < 4; ++s) m[r][s] += p[r] * p[s];
+            for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i) b[i][r] += p[r] * a->still[k][i];
+        }
+    }
+    /* Gauss-Jordan on [m | b^T] (x in [-1, 1]: well conditioned). */
+    for (int col = 0; col < 4; ++col) {
+        const double piv = m[col][col];
+        if (!(fabs(piv) > 0)) return;
+        for (int r = 0; r < 4; ++r) {
+            if (r == col) continue;
+            const double f = m[r][col] / piv;
+            for (int s = 0; s < 4; ++s) m[r][s] -= f * m[col][s];
+            for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i) b[i][r] -= f * b[i][col];
+        }
+    }
+    for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i)
+        for (int r = 0; r < 4; ++r) a->trend[i][r] = b[i][r] / m[r][r];
+    a->moved = 1;
 }
 
 void loadid_noise_acc_still(loadid_noise_acc_t *a, const double x[LOADID_NOISE_CHANNELS]) {
@@ -82,9 +125,17 @@ static double mad_sigma(loadid_noise_acc_t *a, const double (*rows)[LOADID_NOISE
 int loadid_noise_acc_sigma(loadid_noise_acc_t *a, int min_still,
                            double sigma[LOADID_NOISE_CHANNELS]) {
     if (a->still_n >= min_still && a->still_n >= 2) {
-        for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i)
-            sigma[i] =
-                mad_sigma(a, (const double(*)[LOADID_NOISE_CHANNELS])a->still, a->still_n, i, 1);
+        for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i) {
+            if (!a->moved) {
+                sigma[i] = mad_sigma(a, (const double(*)[LOADID_NOISE_CHANNELS])a->still,
+                                     a->still_n, i, 1);
+                continue;
+            }
+            const int n = a->still_n;
+            for (int k = 0; k < n; ++k) a->scratch[k] = fabs(still_value(a, k, i));
+            /* the cubic's 4 parameters: n - 4 degrees of freedom */
+            sigma[i] = MAD_TO_SIGMA * median(a->scratch, n) * sqrt((double)n / (n - 4));
+        }
         return LOADID_NOISE_STILL;
     }
     if (a->d3_n >= D3_MIN) {
@@ -105,13 +156,14 @@ int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double 
     if (n < 2 || n_mean < 1) return -EAGAIN;
     double mean[6] = {0}, c[6][6] = {{0}}, lag[6] = {0}, f[6];
     for (int k = 0; k < n; ++k)
-        for (int i = 0; i < 6; ++i) mean[i] += a->still[k][i] / n;
+        for (int i = 0; i < 6; ++i) mean[i] += still_value(a, k, i) / n;
     for (int k = 0; k < n; ++k)
         for (int i = 0; i < 6; ++i) {
-            const double di = a->still[k][i] - mean[i];
-            for (int j = 0; j < 6; ++j) c[i][j] += di * (a->still[k][j] - mean[j]);
-            if (k > 0) lag[i] += di * (a->still[k - 1][i] - mean[i]);
+            const double di = still_value(a, k, i) - mean[i];
+            for (int j = 0; j < 6; ++j) c[i][j] += di * (still_value(a, k, j) - mean[j]);
+            if (k > 0) lag[i] += di * (still_value(a, k - 1, i) - mean[i]);
         }
+    const int dof = a->moved ? n - 4 : n - 1;
     for (int i = 0; i < 6; ++i) {
         double r = c[i][i] > 0 ? lag[i] / c[i][i] : 0.0;
         r = r < -0.5 ? -0.5 : r > 0.95 ? 0.95 : r;
@@ -119,8 +171,7 @@ int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double 
         f[i] = sqrt((1 + r) / (1 - r));
     }
     for (int i = 0; i < 6; ++i)
-        for (int j = 0; j < 6; ++j)
-            cov[6 * i + j] = f[i] * f[j] * c[i][j] / (n - 1) / (double)n_mean;
+        for (int j = 0; j < 6; ++j) cov[6 * i + j] = f[i] * f[j] * c[i][j] / dof / (double)n_mean;
     return 0;
 }
 

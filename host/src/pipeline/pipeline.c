@@ -76,10 +76,14 @@ struct loadid_pipeline {
     /* zeroing */
     int64_t zero_end_us;
     int64_t zero_n, zero_g_n;
-    double zero_sum[6], zero_g_sum[3];
-    double noise_corr[2]; /* the zeroing window's (set_zeroing_noise) */
-    int zeroed;           /* y0 and g_init are valid */
+    double zero_sum[6], zero_g_sum[3], zero_a_sum[60];
+    double zero_g2_sum, zero_w2_sum; /* sum |g|^2, |omega|^2: did it move? */
+    double noise_corr[2];            /* the zeroing window's (set_zeroing_noise) */
+    int zeroed;                      /* y0, g_init and zero_a are valid */
     loadid_real_t y0[6], g_init[3];
+    /* eq. (6) averaged over the zeroing window, what y0 holds of the load
+     * (loadid_regressor_subtract_zeroing) */
+    loadid_real_t zero_a[60];
     /* estimation */
     int64_t est_end_us, last_sample_us, since_publish;
     int64_t start_us;      /* START's utime */
@@ -548,7 +552,7 @@ static int refined_busy(loadid_pipeline_t *p) {
 static void refined_job(void *ctx) {
     loadid_pipeline_t *p = ctx;
     p->job_rc = loadid_refined_run(p->refined, &p->cfg, p->has_accel, p->job_channel, p->job_src,
-                                   p->g_init, p->n_params, p->est[p->refined_m], &p->refined_rep);
+                                   p->zero_a, p->n_params, p->est[p->refined_m], &p->refined_rep);
     p->refined_rep.levels.correlation[0] = p->noise_corr[0]; /* its phi_std's too */
     p->refined_rep.levels.correlation[1] = p->noise_corr[1];
     estimate_at(p, p->refined_m, &p->job_est, 1, 0, LOADID_STATE_DONE);
@@ -650,6 +654,11 @@ static void set_zeroing_noise(loadid_pipeline_t *p) {
          sqrt(cov[28]), sqrt(cov[35]), (double)r[0], (double)r[1]);
 }
 
+/* The load counts as moving while zeroed beyond these (gravity in S's
+ * RMS spread over the window: 0.03 degrees of turn; omega's RMS). */
+#define ZERO_MOVED_G 5e-3
+#define ZERO_MOVED_W 5e-3
+
 static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
     if (p->zero_n < MIN_ZEROING_SAMPLES) {
         char why[160];
@@ -666,6 +675,23 @@ static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
     for (int i = 0; i < 6; ++i) p->y0[i] = (loadid_real_t)(p->zero_sum[i] / (double)p->zero_n);
     for (int i = 0; i < 3; ++i)
         p->g_init[i] = (loadid_real_t)(p->zero_g_sum[i] / (double)p->zero_g_n);
+    for (int i = 0; i < 60; ++i)
+        p->zero_a[i] = (loadid_real_t)(p->zero_a_sum[i] / (double)p->zero_g_n);
+    /* Did the load turn while it was zeroed? Gravity in S comes from the
+     * encoders' positions alone (a count's dither moves it by some 1e-5
+     * m/s^2), omega from their rates. */
+    const double n = (double)p->zero_g_n;
+    double g2 = 0;
+    for (int i = 0; i < 3; ++i) g2 += p->zero_g_sum[i] * p->zero_g_sum[i] / (n * n);
+    const double g_spread = sqrt(fmax(p->zero_g2_sum / n - g2, 0.0)),
+                 w_rms = sqrt(p->zero_w2_sum / n);
+    if (g_spread > ZERO_MOVED_G || w_rms > ZERO_MOVED_W) {
+        loadid_noise_acc_moved(&p->noise);
+        note(p,
+             "zeroing: the load moved (gravity in S spread %.3g m/s^2, omega %.3g rad/s RMS): "
+             "the offset's and the noise's figures come from what a cubic in time leaves",
+             g_spread, w_rms);
+    }
     p->zeroed = 1;
     set_zeroing_noise(p);
     set_state(p, utime, LOADID_STATE_IDLE, "");
@@ -897,6 +923,8 @@ static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const c
             p->zero_n = p->zero_g_n = 0;
             memset(p->zero_sum, 0, sizeof p->zero_sum);
             memset(p->zero_g_sum, 0, sizeof p->zero_g_sum);
+            memset(p->zero_a_sum, 0, sizeof p->zero_a_sum);
+            p->zero_g2_sum = p->zero_w2_sum = 0;
             p->zeroed = 0;
             p->zero_seen = 1;
             loadid_noise_acc_reset_still(&p->noise);
@@ -1028,11 +1056,15 @@ static void check_row_scales(loadid_pipeline_t *p, int64_t t_us) {
          p->cfg.rescale_s, tls, (double)sc[0], (double)sc[1], c);
 }
 
-/* The regressor the estimators use for one motion: eq. (6) with the zeroing
- * term of eqs. (7)-(9), or [A E6]. */
+/* The regressor the estimators use for one motion: eq. (6) less its mean
+ * over the zeroing window (eqs. 7-9, for a load still or moving while
+ * zeroed), or [A E6]. */
 static int data_matrix(const loadid_pipeline_t *p, const loadid_regressor_input_t *in,
                        loadid_real_t A[6 * 16]) {
-    return loadid_regressor_model(in->spec, in->omega, in->alpha, p->n_params, p->g_init, A);
+    if (p->n_params == LOADID_NPHI_OFFSET)
+        return loadid_regressor_model(in->spec, in->omega, in->alpha, p->n_params, NULL, A);
+    const int rc = loadid_regressor(in->spec, in->omega, in->alpha, A);
+    return rc ? rc : loadid_regressor_subtract_zeroing(p->zero_a, A);
 }
 
 /* Completeness: the window's F/T samples, usable or refused, and the time
@@ -1065,8 +1097,15 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
         for (int i = 0; i < 6; ++i) p->zero_sum[i] += (double)y[i];
         p->zero_n++;
         loadid_kin_state_t k;
-        if (loadid_signals_kinematics_at(p->sig, s->t_us, &k) == 0) {
-            for (int i = 0; i < 3; ++i) p->zero_g_sum[i] += (double)k.gravity[i];
+        loadid_real_t a[60];
+        if (loadid_signals_kinematics_at(p->sig, s->t_us, &k) == 0 &&
+            loadid_regressor(k.spec, k.omega, k.alpha, a) == 0) {
+            for (int i = 0; i < 3; ++i) {
+                p->zero_g_sum[i] += (double)k.gravity[i];
+                p->zero_g2_sum += (double)k.gravity[i] * (double)k.gravity[i];
+                p->zero_w2_sum += (double)k.omega[i] * (double)k.omega[i];
+            }
+            for (int i = 0; i < 60; ++i) p->zero_a_sum[i] += (double)a[i];
             p->zero_g_n++;
         }
         return;
@@ -1297,6 +1336,7 @@ int loadid_pipeline_final(const loadid_pipeline_t *p, loadid_pipeline_estimate_t
     comp->zeroed = p->zeroed;
     for (int i = 0; i < 6; ++i) comp->y0[i] = (double)p->y0[i];
     for (int i = 0; i < 3; ++i) comp->g_init[i] = (double)p->g_init[i];
+    for (int i = 0; i < 60; ++i) comp->zero_a[i] = (double)p->zero_a[i];
     return 0;
 }
 
@@ -1314,9 +1354,12 @@ int loadid_pipeline_restore(loadid_pipeline_t *p, const loadid_pipeline_estimate
         if (!isfinite(comp->y0[i])) return -EINVAL;
     for (int i = 0; i < 3; ++i)
         if (!isfinite(comp->g_init[i])) return -EINVAL;
+    for (int i = 0; i < 60; ++i)
+        if (!isfinite(comp->zero_a[i])) return -EINVAL;
     for (int i = 0; i < comp->n_params; ++i) p->phi_total[i] = (loadid_real_t)comp->phi_total[i];
     for (int i = 0; i < 6; ++i) p->y0[i] = (loadid_real_t)comp->y0[i];
     for (int i = 0; i < 3; ++i) p->g_init[i] = (loadid_real_t)comp->g_init[i];
+    for (int i = 0; i < 60; ++i) p->zero_a[i] = (loadid_real_t)comp->zero_a[i];
     p->zeroed = comp->zeroed;
     p->latest[m] = *est;
     p->latest[m].state = LOADID_STATE_DONE;

@@ -187,15 +187,26 @@ static int weigh(loadid_est_t *est, const loadid_noise_levels_t *lv, double omeg
     return rc;
 }
 
+/* The estimators' regressor at stored kinematics k (a - g, omega, alpha):
+ * eq. (6) less the zeroing window's mean of it (zero_a, n_params 10), or
+ * [A E6]. */
+static int regressor_at(const loadid_real_t *k, int n_params, const loadid_real_t *zero_a,
+                        loadid_real_t *A) {
+    if (n_params == LOADID_NPHI_OFFSET)
+        return loadid_regressor_model(k, k + 3, k + 6, n_params, NULL, A);
+    const int rc = loadid_regressor(k, k + 3, k + 6, A);
+    return rc ? rc : loadid_regressor_subtract_zeroing(zero_a, A);
+}
+
 /* Feeds every sample with kinematics to est; returns the samples fed. */
-static int64_t feed(const loadid_refined_t *r, int n_params, const loadid_real_t g_init[3],
+static int64_t feed(const loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
                     const double drift[6], int64_t t_mid, loadid_est_t *est) {
     int64_t fed = 0;
     for (int i = 0; i < r->scount; ++i) {
         if (!r->kin_ok[i]) continue;
         const loadid_real_t *k = r->kin_store + 9 * (size_t)i; /* a - g, omega, alpha */
         loadid_real_t A[6 * 16], y[6];
-        if (loadid_regressor_model(k, k + 3, k + 6, n_params, g_init, A)) continue;
+        if (regressor_at(k, n_params, zero_a, A)) continue;
         const double dt = (double)(r->s[i].t - t_mid) * 1e-6;
         for (int row = 0; row < 6; ++row)
             y[row] = (loadid_real_t)((double)r->s[i].y[row] - drift[row] * dt);
@@ -296,9 +307,8 @@ static int64_t kinematics(loadid_refined_t *r, const loadid_jf_config_t *jf) {
  * drift. Returns the rows summed. */
 #define MAX_COLS (LOADID_NPHI_OFFSET + 6)
 static double normal_equations(const loadid_refined_t *r, int n_params, int cols,
-                               const loadid_real_t g_init[3], double force_sigma,
-                               double torque_sigma, int64_t t_mid, double *M, double *b,
-                               double *yy) {
+                               const loadid_real_t *zero_a, double force_sigma, double torque_sigma,
+                               int64_t t_mid, double *M, double *b, double *yy) {
     memset(M, 0, (size_t)cols * (size_t)cols * sizeof *M);
     memset(b, 0, (size_t)cols * sizeof *b);
     double rows = 0;
@@ -307,7 +317,7 @@ static double normal_equations(const loadid_refined_t *r, int n_params, int cols
         if (!r->kin_ok[i]) continue;
         const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
         loadid_real_t A[6 * 16];
-        if (loadid_regressor_model(k, k + 3, k + 6, n_params, g_init, A)) continue;
+        if (regressor_at(k, n_params, zero_a, A)) continue;
         const double dt = (double)(r->s[i].t - t_mid) * 1e-6;
         for (int row = 0; row < 6; ++row) {
             const double w = 1.0 / sq(row < 3 ? force_sigma : torque_sigma);
@@ -332,12 +342,12 @@ static double normal_equations(const loadid_refined_t *r, int n_params, int cols
  * +Inf when they are singular. rss_group (may be NULL): the force and the
  * torque rows' unweighted residual sums of squares; normal (may be NULL):
  * the normal matrix A^T W A (n x n, full, row-major). */
-static double fit_residual(const loadid_refined_t *r, int n_params, const loadid_real_t g_init[3],
+static double fit_residual(const loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
                            double force_sigma, double torque_sigma, double rss_group[2],
                            double phi_out[16], double normal[16 * 16]) {
     const int n = n_params;
     double M[16 * 16], b[16], yy;
-    normal_equations(r, n, n, g_init, force_sigma, torque_sigma, 0, M, b, &yy);
+    normal_equations(r, n, n, zero_a, force_sigma, torque_sigma, 0, M, b, &yy);
     for (int p = 0; p < n; ++p)
         for (int q = 0; q < p; ++q) M[q * n + p] = M[p * n + q];
     if (normal) memcpy(normal, M, (size_t)n * (size_t)n * sizeof *M);
@@ -355,7 +365,7 @@ static double fit_residual(const loadid_refined_t *r, int n_params, const loadid
             if (!r->kin_ok[i]) continue;
             const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
             loadid_real_t A[6 * 16], pred[6];
-            if (loadid_regressor_model(k, k + 3, k + 6, n, g_init, A)) continue;
+            if (regressor_at(k, n, zero_a, A)) continue;
             loadid_regressor_apply(A, n, phi, pred);
             for (int row = 0; row < 6; ++row)
                 rss_group[row / 3] += sq((double)(r->s[i].y[row] - pred[row]));
@@ -379,13 +389,12 @@ typedef struct {
     double step, std;
 } delay_step_t;
 
-static delay_step_t delay_step(const loadid_refined_t *r, int n_params,
-                               const loadid_real_t g_init[3], double force_sigma,
-                               double torque_sigma) {
+static delay_step_t delay_step(const loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
+                               double force_sigma, double torque_sigma) {
     const int n = n_params;
     delay_step_t out = {0, INFINITY};
     double x[16], M[16 * 16];
-    if (!isfinite(fit_residual(r, n, g_init, force_sigma, torque_sigma, NULL, x, M))) return out;
+    if (!isfinite(fit_residual(r, n, zero_a, force_sigma, torque_sigma, NULL, x, M))) return out;
     loadid_real_t phi[16];
     for (int p = 0; p < n; ++p) phi[p] = (loadid_real_t)x[p];
     double g[16] = {0}, cc = 0;
@@ -398,7 +407,7 @@ static delay_step_t delay_step(const loadid_refined_t *r, int n_params,
         memmove(A[0], A[1], 2 * sizeof A[0]);
         memmove(pred[0], pred[1], 2 * sizeof pred[0]);
         t[0] = t[1], t[1] = t[2];
-        if (!r->kin_ok[i] || loadid_regressor_model(k, k + 3, k + 6, n, g_init, A[2])) {
+        if (!r->kin_ok[i] || regressor_at(k, n, zero_a, A[2])) {
             have = 0;
             continue;
         }
@@ -454,17 +463,17 @@ static delay_step_t delay_step(const loadid_refined_t *r, int n_params,
 #define DELAY_MAX_US 50000
 #define DELAY_USE_US 1000
 #define DELAY_SIGNIFICANT 3.0
-static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t g_init[3],
+static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
                          double force_sigma, double torque_sigma, double *std_us, int *used_it) {
     const int count = r->count;
     /* The kinematics at 0 are in place (the best smoothing's). */
     const double rss0 =
-        fit_residual(r, n_params, g_init, force_sigma, torque_sigma, NULL, NULL, NULL) /
+        fit_residual(r, n_params, zero_a, force_sigma, torque_sigma, NULL, NULL, NULL) /
         (double)kin_count(r);
     double d = 0;
     *std_us = INFINITY;
     for (int it = 0; it < 4; ++it) {
-        const delay_step_t step = delay_step(r, n_params, g_init, force_sigma, torque_sigma);
+        const delay_step_t step = delay_step(r, n_params, zero_a, force_sigma, torque_sigma);
         d = fmax(-DELAY_MAX_US, fmin(DELAY_MAX_US, d + step.step));
         *std_us = step.std;
         const int64_t used = kinematics_at(r, count, llround(d));
@@ -476,7 +485,7 @@ static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t 
     *used_it = 0;
     if (llabs(delay) >= DELAY_USE_US && (double)llabs(delay) >= DELAY_SIGNIFICANT * *std_us) {
         const int64_t used = kin_count(r);
-        const double rss = used > 1 ? fit_residual(r, n_params, g_init, force_sigma, torque_sigma,
+        const double rss = used > 1 ? fit_residual(r, n_params, zero_a, force_sigma, torque_sigma,
                                                    NULL, NULL, NULL) /
                                           (double)used
                                     : INFINITY;
@@ -498,12 +507,12 @@ static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t 
  * offset does not fit, moved the COM of a slow motion by 12 to 26 mm
  * (2-3 mm without it) while phi_std said 5. Returns 0, or -1 when the
  * fit is singular. */
-static int fit_drift(const loadid_refined_t *r, const loadid_real_t g_init[3], double force_sigma,
+static int fit_drift(const loadid_refined_t *r, const loadid_real_t *zero_a, double force_sigma,
                      double torque_sigma, int64_t t_mid, double drift[6], double extra_var[10]) {
     enum { N = MAX_COLS, N16 = LOADID_NPHI_OFFSET };
     double M[N * N], b[N], yy;
     const double rows =
-        normal_equations(r, N16, N, g_init, force_sigma, torque_sigma, t_mid, M, b, &yy);
+        normal_equations(r, N16, N, zero_a, force_sigma, torque_sigma, t_mid, M, b, &yy);
     if (!(rows > N + 2)) return -1;
     for (int p = 0; p < N; ++p)
         for (int q = 0; q < p; ++q) M[q * N + p] = M[p * N + q];
@@ -530,7 +539,7 @@ static int fit_drift(const loadid_refined_t *r, const loadid_real_t g_init[3], d
 
 int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_accel,
                        const double channel[LOADID_NOISE_CHANNELS], int channel_source,
-                       const loadid_real_t g_init[3], int n_params, loadid_est_t *est,
+                       const loadid_real_t *zero_a, int n_params, loadid_est_t *est,
                        loadid_refined_report_t *rep) {
     memset(rep, 0, sizeof *rep);
     if (r->scount < 2) return LOADID_E_NOT_EXCITED;
@@ -552,7 +561,7 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
         jf.jerk_psd = (loadid_real_t)((double)r->jf.jerk_psd * pow(10.0, -trial));
         const int64_t n = kinematics(r, &jf);
         if (n < 2) continue;
-        const double rss = fit_residual(r, n_params, g_init, rep->levels.force, rep->levels.torque,
+        const double rss = fit_residual(r, n_params, zero_a, rep->levels.force, rep->levels.torque,
                                         NULL, NULL, NULL);
         if (!(rss < best)) continue;
         best = rss, best_psd = (double)jf.jerk_psd, used = n, best_count = r->count;
@@ -563,7 +572,7 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     r->count = best_count;
     jf.jerk_psd = (loadid_real_t)best_psd;
     rep->jerk_psd = best_psd;
-    rep->joint_delay_us = fit_delay(r, n_params, g_init, rep->levels.force, rep->levels.torque,
+    rep->joint_delay_us = fit_delay(r, n_params, zero_a, rep->levels.force, rep->levels.torque,
                                     &rep->joint_delay_std_us, &rep->joint_delay_used);
     used = kin_count(r);
     double smooth_sigma[3];
@@ -602,7 +611,7 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     /* The rows' noise raised by what of a least-squares fit's residual the
      * wrench's noise does not explain, then the TLS fit. */
     double rss[2];
-    fit_residual(r, n_params, g_init, rep->levels.force, rep->levels.torque, rss, NULL, NULL);
+    fit_residual(r, n_params, zero_a, rep->levels.force, rep->levels.torque, rss, NULL, NULL);
     const double dof = fmax(3.0 * (double)used - n_params / 2.0, 1.0);
     rep->unexplained[0] = sqrt(fmax(rss[0] / dof - sq(rep->levels.force), 0));
     rep->unexplained[1] = sqrt(fmax(rss[1] / dof - sq(rep->levels.torque), 0));
@@ -613,9 +622,9 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     /* With the offset estimated, its drift too. */
     const int64_t t_mid = r->s[r->scount / 2].t;
     rep->drift_fitted = n_params == LOADID_NPHI_OFFSET &&
-                        fit_drift(r, g_init, rep->levels.force, rep->levels.torque, t_mid,
+                        fit_drift(r, zero_a, rep->levels.force, rep->levels.torque, t_mid,
                                   rep->drift, rep->drift_var) == 0;
     if (!rep->drift_fitted) memset(rep->drift, 0, sizeof rep->drift);
-    rep->samples = feed(r, n_params, g_init, rep->drift, t_mid, est);
+    rep->samples = feed(r, n_params, zero_a, rep->drift, t_mid, est);
     return rep->samples > 1 ? 0 : LOADID_E_NOT_EXCITED;
 }
