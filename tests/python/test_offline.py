@@ -126,26 +126,34 @@ SLOW = "trajectory:\n  base_frequency: 0.1\n  harmonics: 4\n  max_frequency: 0.4
 UR5 = Path(__file__).resolve().parents[1] / "data" / "urdf" / "ur5_jr3.urdf"
 
 
-def real_data_like(tmp_path, robot="", seed=1):
-    """A recording like a slow real robot's and the four methods' results
-    on it (the offset estimated): a trajectory of 0.1-0.4 Hz at 30 % of
-    its amplitude, no still phase and no ZERO, a drifting F/T bias,
-    1 m/s^2 of accelerometer bias and 200 us of time-stamp jitter on both
-    streams. robot: the configuration's robot section ("" the RX60)."""
+def slow_recording(tmp_path, robot, seed, simulation, *extra):
+    """A recording of slow motion: a trajectory of 0.1-0.4 Hz designed for
+    the robot section robot ("" the RX60) and seed, simulated with the
+    simulation section given (and loadid-sim's extra arguments)."""
     slow = robot + SLOW
     traj_cfg = write_config(tmp_path / "traj.yaml", slow + f"  seed: {seed}\n")
     (tmp_path / "traj").mkdir()
     subprocess.run([program("LOADID_TRAJ_EXE"), "--config", str(traj_cfg), "--monte-carlo", "300",
                     "--candidates", "1", "--max-evals", "800", "--quiet",
                     "--out", str(tmp_path / "traj" / "traj.yaml")], check=True, timeout=300)
-    sim = write_config(tmp_path / "sim.yaml", slow + "simulation:\n  zero: false\n  still_s: 0.3\n"
-                       "  drift: [0.05, -0.04, 0.03, 0.002, -0.002, 0.001]\n"
-                       "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
-                       "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
-                       "  noise:\n    angular: 0.0\n")
-    rec = simulate(tmp_path / "rec", tmp_path / "traj", "--config", sim, "--seed", str(seed),
-                   "--values", tmp_path / "values.csv")
-    cfg = write_config(tmp_path / "c.yaml", slow + "estimation:\n  offset_model: estimate\n"
+    sim = write_config(tmp_path / "sim.yaml", slow + simulation)
+    return simulate(tmp_path / "rec", tmp_path / "traj", "--config", sim, "--seed", str(seed),
+                    *extra)
+
+
+def real_data_like(tmp_path, robot="", seed=1):
+    """A recording like a slow real robot's and the four methods' results
+    on it (the offset estimated): a trajectory of 0.1-0.4 Hz at 30 % of
+    its amplitude, no still phase and no ZERO, a drifting F/T bias,
+    1 m/s^2 of accelerometer bias and 200 us of time-stamp jitter on both
+    streams. robot: the configuration's robot section ("" the RX60)."""
+    rec = slow_recording(tmp_path, robot, seed,
+                         "simulation:\n  zero: false\n  still_s: 0.3\n"
+                         "  drift: [0.05, -0.04, 0.03, 0.002, -0.002, 0.001]\n"
+                         "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
+                         "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
+                         "  noise:\n    angular: 0.0\n", "--values", tmp_path / "values.csv")
+    cfg = write_config(tmp_path / "c.yaml", robot + SLOW + "estimation:\n  offset_model: estimate\n"
                        "  methods: [RTLS, RIV, RLS, REFINED]\n")
     result, _ = offline(cfg, rec)
     return rec, result
@@ -249,16 +257,10 @@ def test_zeroing_while_the_load_moves(tmp_path):
     leaves (the still window's spread said 0.59 N for 0.1 N, and phi_std
     17 % for a 0.5 % error). Seen: RTLS and RLS 0.1 % and 0.5 mm off,
     phi_std of the mass 0.5 %, the force noise 0.097 N."""
-    (tmp_path / "traj").mkdir()
-    traj_cfg = write_config(tmp_path / "traj.yaml", SLOW + "  seed: 1\n")
-    subprocess.run([program("LOADID_TRAJ_EXE"), "--config", str(traj_cfg), "--monte-carlo", "300",
-                    "--candidates", "1", "--max-evals", "800", "--quiet",
-                    "--out", str(tmp_path / "traj" / "traj.yaml")], check=True, timeout=300)
-    sim = write_config(tmp_path / "sim.yaml", SLOW + "simulation:\n  zero: true\n  still_s: 0.05\n"
-                       "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
-                       "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
-                       "  noise:\n    angular: 0.0\n")
-    rec = simulate(tmp_path / "rec", tmp_path / "traj", "--config", sim, "--seed", "1")
+    rec = slow_recording(tmp_path, "", 1, "simulation:\n  zero: true\n  still_s: 0.05\n"
+                         "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
+                         "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
+                         "  noise:\n    angular: 0.0\n")
     cfg = write_config(tmp_path / "c.yaml", SLOW + "estimation:\n  methods: [RTLS, RLS, REFINED]\n")
     result, err = offline(cfg, rec, "--verbose")
     assert "zeroing: the load moved" in err, err
