@@ -11,6 +11,7 @@
 
 void loadid_noise_acc_reset(loadid_noise_acc_t *a) {
     a->still_n = 0;
+    a->moved = 0;
     a->hist_n = 0;
     a->last_t_us = 0;
     a->d3_n = a->d3_head = 0;
