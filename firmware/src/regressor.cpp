@@ -60,6 +60,20 @@ extern "C" int loadid_regressor_model(const loadid_real_t spec[3], const loadid_
     return 0;
 }
 
+extern "C" int loadid_regressor_model_zeroed(const loadid_real_t spec[3],
+                                             const loadid_real_t omega[3],
+                                             const loadid_real_t alpha[3], int n_params,
+                                             const loadid_real_t zero_a[6 * 10], loadid_real_t *A) {
+    if (n_params == LOADID_NPHI_OFFSET)
+        return loadid_regressor_model(spec, omega, alpha, n_params, nullptr, A);
+    if (!A || !zero_a || n_params != LOADID_NPHI) return -EINVAL;
+    loadid_real_t A10[LOADID_NROWS * LOADID_NPHI];
+    int rc = loadid_regressor(spec, omega, alpha, A10);
+    if (rc == 0) rc = loadid_regressor_subtract_zeroing(zero_a, A10);
+    if (rc == 0) std::memcpy(A, A10, sizeof A10);
+    return rc;
+}
+
 extern "C" int loadid_regressor_apply(const loadid_real_t *A, int n_params,
                                       const loadid_real_t *phi, loadid_real_t y[6]) {
     if (!A || !phi || !y) return -EINVAL;

@@ -291,6 +291,15 @@ static void test_zeroing_while_moving(void **state) {
         assert_int_equal(loadid_regressor_apply(A, 10, phi, y), 0);
         const double scale = fmax(1.0, fmax(max_abs(w, 6), max_abs(w0, 6)));
         for (int i = 0; i < 6; ++i) ASSERT_CLOSE(y[i], w[i] - w0[i], REL_TOL * scale, "moving");
+        /* The model in one call: the same matrix, and [A E6] for 16. */
+        double Am[96], A16[96];
+        assert_int_equal(loadid_regressor_model_zeroed(m.spec, m.omega, m.alpha, 10, a0, Am), 0);
+        assert_memory_equal(Am, A, sizeof A);
+        assert_int_equal(loadid_regressor_model_zeroed(m.spec, m.omega, m.alpha, 16, NULL, Am), 0);
+        assert_int_equal(loadid_regressor_model(m.spec, m.omega, m.alpha, 16, NULL, A16), 0);
+        assert_memory_equal(Am, A16, sizeof A16);
+        assert_int_equal(loadid_regressor_model_zeroed(m.spec, m.omega, m.alpha, 10, NULL, Am),
+                         -EINVAL);
 
         /* At rest the window's mean is A(-g_init, 0, 0). */
         double g[3], still[60], zero[3] = {0, 0, 0}, spec[3], B[60];

@@ -57,6 +57,14 @@ int loadid_regressor_model(const loadid_real_t spec[3], const loadid_real_t omeg
                            const loadid_real_t alpha[3], int n_params,
                            const loadid_real_t g_init[3], loadid_real_t *A);
 
+/* The same with the zeroing term of a load that may have moved while it
+ * was zeroed: n_params 10 gives eq. (6) less zero_a, eq. (6) averaged over
+ * the zeroing window (loadid_regressor_subtract_zeroing; not NULL);
+ * n_params 16 gives [A E6] (zero_a ignored). Same returns. */
+int loadid_regressor_model_zeroed(const loadid_real_t spec[3], const loadid_real_t omega[3],
+                                  const loadid_real_t alpha[3], int n_params,
+                                  const loadid_real_t zero_a[6 * 10], loadid_real_t *A);
+
 /* The wrench the model predicts: y = A phi for an A of n_params columns
  * (10 or 16). Returns 0 or -EINVAL. */
 int loadid_regressor_apply(const loadid_real_t *A, int n_params, const loadid_real_t *phi,

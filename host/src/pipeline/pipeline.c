@@ -1061,10 +1061,7 @@ static void check_row_scales(loadid_pipeline_t *p, int64_t t_us) {
  * zeroed), or [A E6]. */
 static int data_matrix(const loadid_pipeline_t *p, const loadid_regressor_input_t *in,
                        loadid_real_t A[6 * 16]) {
-    if (p->n_params == LOADID_NPHI_OFFSET)
-        return loadid_regressor_model(in->spec, in->omega, in->alpha, p->n_params, NULL, A);
-    const int rc = loadid_regressor(in->spec, in->omega, in->alpha, A);
-    return rc ? rc : loadid_regressor_subtract_zeroing(p->zero_a, A);
+    return loadid_regressor_model_zeroed(in->spec, in->omega, in->alpha, p->n_params, p->zero_a, A);
 }
 
 /* Completeness: the window's F/T samples, usable or refused, and the time

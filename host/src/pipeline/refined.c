@@ -187,17 +187,6 @@ static int weigh(loadid_est_t *est, const loadid_noise_levels_t *lv, double omeg
     return rc;
 }
 
-/* The estimators' regressor at stored kinematics k (a - g, omega, alpha):
- * eq. (6) less the zeroing window's mean of it (zero_a, n_params 10), or
- * [A E6]. */
-static int regressor_at(const loadid_real_t *k, int n_params, const loadid_real_t *zero_a,
-                        loadid_real_t *A) {
-    if (n_params == LOADID_NPHI_OFFSET)
-        return loadid_regressor_model(k, k + 3, k + 6, n_params, NULL, A);
-    const int rc = loadid_regressor(k, k + 3, k + 6, A);
-    return rc ? rc : loadid_regressor_subtract_zeroing(zero_a, A);
-}
-
 /* Feeds every sample with kinematics to est; returns the samples fed. */
 static int64_t feed(const loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
                     const double drift[6], int64_t t_mid, loadid_est_t *est) {
@@ -206,7 +195,7 @@ static int64_t feed(const loadid_refined_t *r, int n_params, const loadid_real_t
         if (!r->kin_ok[i]) continue;
         const loadid_real_t *k = r->kin_store + 9 * (size_t)i; /* a - g, omega, alpha */
         loadid_real_t A[6 * 16], y[6];
-        if (regressor_at(k, n_params, zero_a, A)) continue;
+        if (loadid_regressor_model_zeroed(k, k + 3, k + 6, n_params, zero_a, A)) continue;
         const double dt = (double)(r->s[i].t - t_mid) * 1e-6;
         for (int row = 0; row < 6; ++row)
             y[row] = (loadid_real_t)((double)r->s[i].y[row] - drift[row] * dt);
@@ -317,7 +306,7 @@ static double normal_equations(const loadid_refined_t *r, int n_params, int cols
         if (!r->kin_ok[i]) continue;
         const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
         loadid_real_t A[6 * 16];
-        if (regressor_at(k, n_params, zero_a, A)) continue;
+        if (loadid_regressor_model_zeroed(k, k + 3, k + 6, n_params, zero_a, A)) continue;
         const double dt = (double)(r->s[i].t - t_mid) * 1e-6;
         for (int row = 0; row < 6; ++row) {
             const double w = 1.0 / sq(row < 3 ? force_sigma : torque_sigma);
@@ -365,7 +354,7 @@ static double fit_residual(const loadid_refined_t *r, int n_params, const loadid
             if (!r->kin_ok[i]) continue;
             const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
             loadid_real_t A[6 * 16], pred[6];
-            if (regressor_at(k, n, zero_a, A)) continue;
+            if (loadid_regressor_model_zeroed(k, k + 3, k + 6, n, zero_a, A)) continue;
             loadid_regressor_apply(A, n, phi, pred);
             for (int row = 0; row < 6; ++row)
                 rss_group[row / 3] += sq((double)(r->s[i].y[row] - pred[row]));
@@ -407,7 +396,7 @@ static delay_step_t delay_step(const loadid_refined_t *r, int n_params, const lo
         memmove(A[0], A[1], 2 * sizeof A[0]);
         memmove(pred[0], pred[1], 2 * sizeof pred[0]);
         t[0] = t[1], t[1] = t[2];
-        if (!r->kin_ok[i] || regressor_at(k, n, zero_a, A[2])) {
+        if (!r->kin_ok[i] || loadid_regressor_model_zeroed(k, k + 3, k + 6, n, zero_a, A[2])) {
             have = 0;
             continue;
         }
