@@ -264,6 +264,7 @@ def test_zeroing_while_the_load_moves(tmp_path):
     cfg = write_config(tmp_path / "c.yaml", SLOW + "estimation:\n  methods: [RTLS, RLS, REFINED]\n")
     result, err = offline(cfg, rec, "--verbose")
     assert "zeroing: the load moved" in err, err
+    assert "drifts since zeroing" not in err, err
     force_noise = float(err.split("noise (zeroing): f ")[1].split(" N")[0])
     assert abs(force_noise / 0.1 - 1) < 0.15, force_noise
     phi, _ = truth_phi(rec)
@@ -275,6 +276,39 @@ def test_zeroing_while_the_load_moves(tmp_path):
         assert mass_err < 0.015 and com_err < 0.005, (est["method"], est["mass"], est["com"])
         assert mass_err <= 3 * est["phi_std"][0] / m_t, (est["method"], est["phi_std"])
         assert est["phi_std"][0] / m_t < 0.02, (est["method"], est["phi_std"])
+
+
+def test_zeroed_offset_drift_is_found_and_taken_out(tmp_path):
+    """UR5, seed 2 of the real-data-like case with ZERO while it moves and
+    the offset model zeroing: the F/T offset drifts (0.05, -0.04, 0.03
+    N/s) from the zeroing on, which the zeroed model takes as constant.
+    Without the drift check every method claimed the mass 6.2 % off at
+    0.8 % phi_std. The check finds the drift (p about 1e-8 where 240 fast
+    recordings without drift gave under 1e-4 in 8 %), the on-line methods
+    are corrected by its pull and REFINED fits it. Seen: mass within
+    0.2 %, COM within 3.7 mm, the force rates within 0.008 N/s."""
+    rec = slow_recording(tmp_path, f"robot:\n  urdf: {UR5}\n", 2,
+                         "simulation:\n  zero: true\n  still_s: 0.05\n"
+                         "  drift: [0.05, -0.04, 0.03, 0.002, -0.002, 0.001]\n"
+                         "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
+                         "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
+                         "  noise:\n    angular: 0.0\n")
+    cfg = write_config(tmp_path / "c.yaml", f"robot:\n  urdf: {UR5}\n" + SLOW +
+                       "estimation:\n  methods: [RTLS, RIV, RLS, REFINED]\n")
+    result, err = offline(cfg, rec, "--verbose")
+    line = err.split("drifts since zeroing: ")[1]
+    rates = [float(v) for v in line.split(" N/s")[0].split()]
+    assert np.abs(np.array(rates) - [0.05, -0.04, 0.03]).max() < 0.015, line
+    assert "REFINED: the offset drifts" in err, err
+    phi, _ = truth_phi(rec)
+    m_t, c_t, _ = physical(phi)
+    for est in result:
+        mass_err = abs(est["model"]["mass"] - m_t) / m_t
+        com_err = np.linalg.norm(np.array(est["model"]["com"]) - c_t)
+        print(est["method"], "mass", mass_err, "com", com_err, "std", est["phi_std"][0])
+        assert mass_err < 0.006 and com_err < 0.008, (est["method"], mass_err, com_err)
+        assert mass_err <= 3 * est["phi_std"][0] / m_t, (est["method"], est["phi_std"])
+        assert "inertia" not in est["identified"], (est["method"], est["identified"])
 
 
 def test_tls_on_joint_filter_columns_is_not_biased_by_the_misfit(trajectory, tmp_path):

@@ -32,7 +32,10 @@
  *   drift    with the offset estimated (no zeroing), a linear drift of it
  *            too (a sensor warming up): least squares with columns
  *            (t - t_mid) E6 beside [A E6]; the wrench fed is detrended by
- *            it, and phi_std gains what estimating it costs.
+ *            it, and phi_std gains what estimating it costs. With zeroing,
+ *            the same with columns (t - t_zero) E6 beside A when the
+ *            caller's check found a drift since zeroing (t_zero the
+ *            zeroing window's middle, where the zeroed offset is exact).
  *   weights  the smoothed joints' columns are treated as exact (the mixed
  *            LS-TLS limit: their noise set 1e-3 of the smoother's own
  *            covariance, whose white-jerk model overstates the error of a
@@ -73,7 +76,7 @@ typedef struct {
     int joint_delay_used;         /* REFINED took its kinematics that much later
                                   (a delay of 1 ms or more, at least 3 standard
                                   errors, that lowers the residual) */
-    int drift_fitted;             /* with the offset estimated: its linear drift */
+    int drift_fitted;             /* the offset's linear drift was fitted (refined_run) */
     double drift[6];              /* [N/s, N m/s], taken out of the wrench fed */
     double drift_var[10];         /* what estimating it adds to phi's variance */
     loadid_noise_levels_t levels; /* the levels the final weights used */
@@ -100,12 +103,14 @@ void loadid_refined_sample(loadid_refined_t *r, int64_t t_us, const loadid_real_
  * and ang are real; channel/channel_source the measured wrench and
  * accelerometer noise (noise_model.h); n_params the regressor's model,
  * zero_a (6 x 10, n_params 10) eq. (6) averaged over the zeroing window
- * (loadid_regressor_subtract_zeroing). Returns 0 or a negative code (no samples: LOADID_E_NOT_EXCITED;
- * joints missing around the window: LOADID_E_NO_DATA). */
+ * (loadid_regressor_subtract_zeroing); zeroed_drift_from_us (n_params 10)
+ * t_zero of a drift to fit since zeroing, INT64_MIN for none. Returns 0
+ * or a negative code (no samples: LOADID_E_NOT_EXCITED; joints missing
+ * around the window: LOADID_E_NO_DATA). */
 int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_accel,
                        const double channel[LOADID_NOISE_CHANNELS], int channel_source,
-                       const loadid_real_t *zero_a, int n_params, loadid_est_t *est,
-                       loadid_refined_report_t *rep);
+                       const loadid_real_t *zero_a, int n_params, int64_t zeroed_drift_from_us,
+                       loadid_est_t *est, loadid_refined_report_t *rep);
 
 #ifdef __cplusplus
 }

@@ -11,6 +11,7 @@
 #include "loadid/core.h"
 #include "loadid/jr3.h"
 #include "loadid/setup.h"
+#include "drift_check.h"
 #include "worker.h"
 
 #define MIN_ZEROING_SAMPLES 10
@@ -21,6 +22,8 @@
  * (completeness): 20 samples of the JR3 at 1 kHz; for the Modbus sensor
  * at least 4 of its poll periods. */
 #define FT_GAP_US 20000
+
+#define DRIFT_P 1e-4
 
 struct loadid_pipeline {
     loadid_config_t cfg;
@@ -78,12 +81,18 @@ struct loadid_pipeline {
     int64_t zero_n, zero_g_n;
     double zero_sum[6], zero_g_sum[3], zero_a_sum[60];
     double zero_g2_sum, zero_w2_sum; /* sum |g|^2, |omega|^2: did it move? */
+    int64_t zero_t_first_us;         /* the zeroing window's first sample */
+    double zero_t_sum;               /* and its samples' time after it, summed [us] */
     double noise_corr[2];            /* the zeroing window's (set_zeroing_noise) */
     int zeroed;                      /* y0, g_init and zero_a are valid */
     loadid_real_t y0[6], g_init[3];
     /* eq. (6) averaged over the zeroing window, what y0 holds of the load
      * (loadid_regressor_subtract_zeroing) */
     loadid_real_t zero_a[60];
+    /* does the offset drift after zeroing? (drift_check.h) */
+    loadid_drift_check_t drift;
+    loadid_drift_result_t drift_result;
+    int drift_significant; /* its pull counts in every method's phi_std */
     /* estimation */
     int64_t est_end_us, last_sample_us, since_publish;
     int64_t start_us;      /* START's utime */
@@ -307,6 +316,11 @@ static void model_of(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
         for (int i = 0; i < 10; ++i)
             std[i] =
                 (loadid_real_t)sqrt((double)std[i] * (double)std[i] + p->refined_rep.drift_var[i]);
+    /* The zeroed model's drift (check_drift): what fitting it costs. */
+    if (m != p->refined_m && p->drift_significant)
+        for (int i = 0; i < 10; ++i)
+            std[i] =
+                (loadid_real_t)sqrt((double)std[i] * (double)std[i] + p->drift_result.extra_var[i]);
     /* How far the load's groups stand out of the noise in the data. */
     loadid_real_t load_n[16] = {0}, snr[3];
     for (int i = 0; i < 10; ++i) load_n[i] = load[i];
@@ -349,6 +363,13 @@ static void fill_estimate(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
     }
 }
 
+/* Method m's final phi as if the zeroed model's drift (check_drift) had
+ * been taken out of the wrench; REFINED takes it out itself. */
+static void without_drift(const loadid_pipeline_t *p, int m, loadid_real_t *phi) {
+    if (!p->drift_significant || m == p->refined_m) return;
+    for (int i = 0; i < 10; ++i) phi[i] -= (loadid_real_t)p->drift_result.pull[i];
+}
+
 /* At DONE, a method the noise-ratio gate refused whose solution is unique
  * without it (loadid_est_estimate_unique): on slow motion the inertia and
  * the offset do not stand out while the mass does (0.9 % std on a UR5),
@@ -360,6 +381,7 @@ static int final_if_determined(loadid_pipeline_t *p, int m, loadid_pipeline_esti
     loadid_real_t phi[16] = {0};
     loadid_est_info_t info;
     if (loadid_est_estimate_unique(p->est[m], phi, &info) != 0) return 0;
+    without_drift(p, m, phi);
     loadid_pipeline_estimate_t t = *e;
     t.valid = 1;
     t.error = 0;
@@ -403,6 +425,7 @@ static void estimate_at(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t 
         explain(p, m, rc, &info, taken == -1, e->why, sizeof e->why);
         return;
     }
+    if (final) without_drift(p, m, phi);
     fill_estimate(p, m, phi, e, final);
 }
 
@@ -551,8 +574,9 @@ static int refined_busy(loadid_pipeline_t *p) {
  * 1.4 ms for 1500 samples, too long for the loop's 1 ms (bench_soak.py). */
 static void refined_job(void *ctx) {
     loadid_pipeline_t *p = ctx;
-    p->job_rc = loadid_refined_run(p->refined, &p->cfg, p->has_accel, p->job_channel, p->job_src,
-                                   p->zero_a, p->n_params, p->est[p->refined_m], &p->refined_rep);
+    p->job_rc = loadid_refined_run(
+        p->refined, &p->cfg, p->has_accel, p->job_channel, p->job_src, p->zero_a, p->n_params,
+        p->drift_significant ? p->drift.t0_us : INT64_MIN, p->est[p->refined_m], &p->refined_rep);
     p->refined_rep.levels.correlation[0] = p->noise_corr[0]; /* its phi_std's too */
     p->refined_rep.levels.correlation[1] = p->noise_corr[1];
     estimate_at(p, p->refined_m, &p->job_est, 1, 0, LOADID_STATE_DONE);
@@ -613,9 +637,29 @@ static void choose_primary(loadid_pipeline_t *p) {
     for (int i = 0; i < 6; ++i) p->phi_total[10 + i] = (loadid_real_t)e->offset[i];
 }
 
+/* With zeroing: does the offset drift after it? (drift_check.h) When it
+ * does, every on-line method's final estimate is taken as if the fitted
+ * drift had been out of the wrench (exact for least squares: phi less the
+ * drift's pull), phi_std gains what fitting it costs, and REFINED fits it
+ * itself. */
+static void check_drift(loadid_pipeline_t *p) {
+    if (p->n_params != LOADID_NPHI) return;
+    loadid_drift_result_t *r = &p->drift_result;
+    loadid_drift_check_result(&p->drift, r);
+    p->drift_significant = r->tested && r->p_value < DRIFT_P;
+    if (p->drift_significant)
+        note(p,
+             "the F/T offset drifts since zeroing: %.3g %.3g %.3g N/s, %.3g %.3g %.3g N m/s "
+             "(p %.2g over %d blocks); the estimates are corrected by its pull (mass %.3g kg) "
+             "and phi_std counts fitting it",
+             r->rate[0], r->rate[1], r->rate[2], r->rate[3], r->rate[4], r->rate[5], r->p_value,
+             r->blocks, r->pull[0]);
+}
+
 static void finish_estimation(loadid_pipeline_t *p, int64_t utime, int by_stop) {
     check_complete(p, utime, by_stop);
     if (!p->complete) note(p, "incomplete: %s", p->incomplete_reason);
+    check_drift(p);
     if (p->refined_m >= 0) run_refined(p);
     set_state(p, utime, LOADID_STATE_DONE, "");
     publish_all(p, 1);
@@ -831,6 +875,7 @@ static void reset_run(loadid_pipeline_t *p) {
     p->have_row = 0;
     p->primary = -1;
     p->refined_ran = 0;
+    p->drift_significant = 0;
     if (p->refined) loadid_refined_start(p->refined);
 }
 
@@ -924,7 +969,7 @@ static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const c
             memset(p->zero_sum, 0, sizeof p->zero_sum);
             memset(p->zero_g_sum, 0, sizeof p->zero_g_sum);
             memset(p->zero_a_sum, 0, sizeof p->zero_a_sum);
-            p->zero_g2_sum = p->zero_w2_sum = 0;
+            p->zero_g2_sum = p->zero_w2_sum = p->zero_t_sum = 0;
             p->zeroed = 0;
             p->zero_seen = 1;
             loadid_noise_acc_reset_still(&p->noise);
@@ -945,6 +990,10 @@ static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const c
             }
             reset_run(p);
             apply_measured_noise(p);
+            if (p->n_params == LOADID_NPHI)
+                loadid_drift_check_reset(
+                    &p->drift, p->zero_t_first_us + llround(p->zero_t_sum / (double)p->zero_n),
+                    p->levels.force, p->levels.torque);
             {
                 loadid_signals_stats_t s;
                 loadid_signals_stats(p->sig, &s);
@@ -1092,6 +1141,8 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
     if (p->state == LOADID_STATE_ZEROING) {
         loadid_noise_acc_still(&p->noise, x);
         for (int i = 0; i < 6; ++i) p->zero_sum[i] += (double)y[i];
+        if (p->zero_n == 0) p->zero_t_first_us = s->t_us;
+        p->zero_t_sum += (double)(s->t_us - p->zero_t_first_us);
         p->zero_n++;
         loadid_kin_state_t k;
         loadid_real_t a[60];
@@ -1129,6 +1180,7 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
     }
     const int have_c = riv && data_matrix(p, &instr, C) == 0;
     if (p->refined) loadid_refined_sample(p->refined, s->t_us, y, lin, ang);
+    if (p->n_params == LOADID_NPHI) loadid_drift_check_add(&p->drift, s->t_us, A, y);
     for (int m = 0; m < p->num_methods; ++m) {
         const int is_riv = p->cfg.methods[m] == LOADID_METHOD_RIV;
         if ((is_riv && !have_c) || m == p->refined_m) continue;

@@ -1,6 +1,8 @@
 /* REFINED: batch TLS over the window on smoothed joint signals (refined.h). */
 #include "loadid/refined.h"
 
+#include "spd.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -216,43 +218,6 @@ static void swap_best(loadid_refined_t *r) {
     r->best_q[0] = sj[0], r->best_q[1] = sj[1], r->best_q[2] = sj[2];
 }
 
-/* M = L L^T in place (lower triangle, row-major, double); 0, or -1 when M
- * is not positive definite. */
-static int chol_factor(double *M, int n) {
-    for (int j = 0; j < n; ++j) {
-        double d = M[j * n + j];
-        for (int k = 0; k < j; ++k) d -= M[j * n + k] * M[j * n + k];
-        if (!(d > 0)) return -1;
-        M[j * n + j] = sqrt(d);
-        for (int i = j + 1; i < n; ++i) {
-            double v = M[i * n + j];
-            for (int k = 0; k < j; ++k) v -= M[i * n + k] * M[j * n + k];
-            M[i * n + j] = v / M[j * n + j];
-        }
-    }
-    return 0;
-}
-
-/* b <- (L L^T)^-1 b for chol_factor's L. */
-static void chol_solve(const double *L, double *b, int n) {
-    for (int i = 0; i < n; ++i) { /* L z = b, then L^T x = z */
-        for (int k = 0; k < i; ++k) b[i] -= L[i * n + k] * b[k];
-        b[i] /= L[i * n + i];
-    }
-    for (int i = n - 1; i >= 0; --i) {
-        for (int k = i + 1; k < n; ++k) b[i] -= L[k * n + i] * b[k];
-        b[i] /= L[i * n + i];
-    }
-}
-
-/* Solves the n x n symmetric positive definite M x = b in place; 0, or -1
- * when M is not positive definite. */
-static int spd_solve(double *M, double *b, int n) {
-    if (chol_factor(M, n)) return -1;
-    chol_solve(M, b, n);
-    return 0;
-}
-
 /* The smoothed joints' kinematics of every sample at its time plus
  * delay_us (kin_store, kin_ok), from the count smoothed entries; returns
  * the samples with kinematics. */
@@ -342,7 +307,7 @@ static double fit_residual(const loadid_refined_t *r, int n_params, const loadid
     if (normal) memcpy(normal, M, (size_t)n * (size_t)n * sizeof *M);
     double x[16];
     memcpy(x, b, sizeof x);
-    if (spd_solve(M, x, n)) return INFINITY;
+    if (loadid_spd_solve(M, x, n)) return INFINITY;
     if (phi_out) memcpy(phi_out, x, sizeof x);
     double fit = 0; /* rss = y^T W y - b^T x at the solution */
     for (int p = 0; p < n; ++p) fit += b[p] * x[p];
@@ -421,7 +386,7 @@ static delay_step_t delay_step(const loadid_refined_t *r, int n_params, const lo
     }
     double b[16]; /* M: fit_residual's A^T W A, over every sample */
     memcpy(b, g, sizeof b);
-    if (spd_solve(M, b, n)) return out;
+    if (loadid_spd_solve(M, b, n)) return out;
     double J = cc; /* c_p^T W c_p */
     for (int p = 0; p < n; ++p) J -= g[p] * b[p];
     if (!(J > 0)) return out;
@@ -487,49 +452,51 @@ static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t 
     return delay;
 }
 
-/* A linear drift of the F/T offset over the window (a sensor warming up),
- * with the offset estimated: weighted least squares on [A E6 (t - t_mid)
- * E6], 22 columns, gives the drift (drift[6], N/s and N m/s), and what
- * estimating it costs phi: per parameter the 22-column fit's variance
- * less the 16-column one's (extra_var[10]), both at the 22-column fit's
- * residual scale. A drift of 0.05 N/s and 0.002 N m/s, which a constant
- * offset does not fit, moved the COM of a slow motion by 12 to 26 mm
- * (2-3 mm without it) while phi_std said 5. Returns 0, or -1 when the
- * fit is singular. */
-static int fit_drift(const loadid_refined_t *r, const loadid_real_t *zero_a, double force_sigma,
-                     double torque_sigma, int64_t t_mid, double drift[6], double extra_var[10]) {
-    enum { N = MAX_COLS, N16 = LOADID_NPHI_OFFSET };
-    double M[N * N], b[N], yy;
+/* A linear drift of the F/T offset (a sensor warming up): weighted least
+ * squares on [A E6 (t - t_ref) E6] with the offset estimated (22 columns,
+ * t_ref the window's middle), on [A (t - t_ref) E6] with zeroing (16, t_ref
+ * the zeroing window's middle, where the offset is zero), gives the drift
+ * (drift[6], N/s and N m/s), and what estimating it costs phi: per
+ * parameter the fit's variance less that without the drift columns
+ * (extra_var[10]), both at the fit's residual scale. A drift of 0.05 N/s
+ * and 0.002 N m/s, which a constant offset does not fit, moved the COM of
+ * a slow motion by 12 to 26 mm (2-3 mm without it) while phi_std said 5.
+ * Returns 0, or -1 when the fit is singular. */
+static int fit_drift(const loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
+                     double force_sigma, double torque_sigma, int64_t t_ref, double drift[6],
+                     double extra_var[10]) {
+    const int n = n_params, N = n_params + 6;
+    double M[MAX_COLS * MAX_COLS], b[MAX_COLS], yy;
     const double rows =
-        normal_equations(r, N16, N, zero_a, force_sigma, torque_sigma, t_mid, M, b, &yy);
+        normal_equations(r, n, N, zero_a, force_sigma, torque_sigma, t_ref, M, b, &yy);
     if (!(rows > N + 2)) return -1;
     for (int p = 0; p < N; ++p)
         for (int q = 0; q < p; ++q) M[q * N + p] = M[p * N + q];
-    double L16[N16 * N16], x[N];
-    for (int p = 0; p < N16; ++p)
-        for (int q = 0; q < N16; ++q) L16[p * N16 + q] = M[p * N + q];
+    double Ln[LOADID_NPHI_OFFSET * LOADID_NPHI_OFFSET], x[MAX_COLS];
+    for (int p = 0; p < n; ++p)
+        for (int q = 0; q < n; ++q) Ln[p * n + q] = M[p * N + q];
     double *L = M; /* factored in place */
-    if (chol_factor(L, N) || chol_factor(L16, N16)) return -1;
-    memcpy(x, b, sizeof x);
-    chol_solve(L, x, N);
+    if (loadid_chol_factor(L, N) || loadid_chol_factor(Ln, n)) return -1;
+    memcpy(x, b, (size_t)N * sizeof *x);
+    loadid_chol_solve(L, x, N);
     double fit = 0;
     for (int p = 0; p < N; ++p) fit += b[p] * x[p];
     const double s2 = fmax(yy - fit, 0) / (rows - N);
-    for (int j = 0; j < 6; ++j) drift[j] = x[N16 + j];
+    for (int j = 0; j < 6; ++j) drift[j] = x[n + j];
     for (int i = 0; i < LOADID_NPHI; ++i) {
-        double e[N] = {0}, e16[N16] = {0};
-        e[i] = e16[i] = 1;
-        chol_solve(L, e, N);
-        chol_solve(L16, e16, N16);
-        extra_var[i] = s2 * fmax(e[i] - e16[i], 0);
+        double e[MAX_COLS] = {0}, en[LOADID_NPHI_OFFSET] = {0};
+        e[i] = en[i] = 1;
+        loadid_chol_solve(L, e, N);
+        loadid_chol_solve(Ln, en, n);
+        extra_var[i] = s2 * fmax(e[i] - en[i], 0);
     }
     return 0;
 }
 
 int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_accel,
                        const double channel[LOADID_NOISE_CHANNELS], int channel_source,
-                       const loadid_real_t *zero_a, int n_params, loadid_est_t *est,
-                       loadid_refined_report_t *rep) {
+                       const loadid_real_t *zero_a, int n_params, int64_t zeroed_drift_from_us,
+                       loadid_est_t *est, loadid_refined_report_t *rep) {
     memset(rep, 0, sizeof *rep);
     if (r->scount < 2) return LOADID_E_NOT_EXCITED;
     /* The wrench's measured (or configured) noise, for the rows. */
@@ -608,12 +575,14 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     rep->levels.torque = hypot(rep->levels.torque, rep->unexplained[1]);
     const int rc = weigh(est, &rep->levels, rep->omega_rms);
     if (rc) return rc;
-    /* With the offset estimated, its drift too. */
-    const int64_t t_mid = r->s[r->scount / 2].t;
-    rep->drift_fitted = n_params == LOADID_NPHI_OFFSET &&
-                        fit_drift(r, zero_a, rep->levels.force, rep->levels.torque, t_mid,
-                                  rep->drift, rep->drift_var) == 0;
+    /* With the offset estimated, its drift too; with zeroing, the drift
+     * since zeroing when the caller found one. */
+    const int64_t t_ref =
+        n_params == LOADID_NPHI_OFFSET ? r->s[r->scount / 2].t : zeroed_drift_from_us;
+    rep->drift_fitted =
+        t_ref != INT64_MIN && fit_drift(r, n_params, zero_a, rep->levels.force, rep->levels.torque,
+                                        t_ref, rep->drift, rep->drift_var) == 0;
     if (!rep->drift_fitted) memset(rep->drift, 0, sizeof rep->drift);
-    rep->samples = feed(r, n_params, zero_a, rep->drift, t_mid, est);
+    rep->samples = feed(r, n_params, zero_a, rep->drift, t_ref, est);
     return rep->samples > 1 ? 0 : LOADID_E_NOT_EXCITED;
 }
