@@ -78,6 +78,63 @@ void loadid_drift_check_add(loadid_drift_check_t *c, int64_t t_us, const loadid_
     c->last_us = t_us;
 }
 
+void loadid_drift_check_add_instruments(loadid_drift_check_t *c, int64_t t_us,
+                                        const loadid_real_t A[60], const loadid_real_t C[60]) {
+    for (int i = 0; i < 60; ++i)
+        if (!isfinite((double)A[i]) || !isfinite((double)C[i])) return;
+    const double tau = (double)(t_us - c->t0_us) * 1e-6;
+    for (int r = 0; r < 6; ++r) {
+        const double w = c->w[r / 3];
+        for (int i = 0; i < NA; ++i) {
+            const double wc = w * (double)C[r * NA + i];
+            for (int j = 0; j < NA; ++j) c->iv_m[i * NA + j] += wc * (double)A[r * NA + j];
+            c->iv_tau[i * 6 + r] += wc * tau;
+        }
+    }
+    c->iv_samples++;
+}
+
+int loadid_drift_check_iv_pull(const loadid_drift_check_t *c, const loadid_drift_result_t *r,
+                               double pull[10]) {
+    if (c->iv_samples == 0) return -1;
+    double M[NA * NA], x[NA];
+    memcpy(M, c->iv_m, sizeof M);
+    for (int i = 0; i < NA; ++i) {
+        x[i] = 0;
+        for (int k = 0; k < 6; ++k) x[i] += c->iv_tau[i * 6 + k] * r->rate[k];
+    }
+    /* Gaussian elimination with partial pivoting: C^T W A is not symmetric. */
+    double scale = 0;
+    for (int i = 0; i < NA * NA; ++i) scale = fmax(scale, fabs(M[i]));
+    for (int k = 0; k < NA; ++k) {
+        int piv = k;
+        for (int i = k + 1; i < NA; ++i)
+            if (fabs(M[i * NA + k]) > fabs(M[piv * NA + k])) piv = i;
+        if (!(fabs(M[piv * NA + k]) > scale * 1e-14)) return -1;
+        if (piv != k) {
+            for (int j = 0; j < NA; ++j) {
+                const double t = M[k * NA + j];
+                M[k * NA + j] = M[piv * NA + j];
+                M[piv * NA + j] = t;
+            }
+            const double t = x[k];
+            x[k] = x[piv];
+            x[piv] = t;
+        }
+        for (int i = k + 1; i < NA; ++i) {
+            const double f = M[i * NA + k] / M[k * NA + k];
+            for (int j = k; j < NA; ++j) M[i * NA + j] -= f * M[k * NA + j];
+            x[i] -= f * x[k];
+        }
+    }
+    for (int i = NA - 1; i >= 0; --i) {
+        for (int j = i + 1; j < NA; ++j) x[i] -= M[i * NA + j] * x[j];
+        x[i] /= M[i * NA + i];
+    }
+    memcpy(pull, x, sizeof x);
+    return 0;
+}
+
 /* The full symmetric n x n (n <= N) leading block of packed sums. */
 static void unpack(const double *s, int n, double *M) {
     for (int i = 0; i < n; ++i)

@@ -37,6 +37,9 @@ typedef struct {
     int64_t samples;
     double cum[LOADID_DRIFT_SUMS];                               /* G (packed lower), b, y^T W y */
     double snap[LOADID_DRIFT_MAX_BLOCKS + 1][LOADID_DRIFT_SUMS]; /* cum at the blocks' ends */
+    /* RIV's: sum C^T W A (10 x 10, row-major) and sum tau C^T W E6 (10 x 6) */
+    double iv_m[100], iv_tau[60];
+    int64_t iv_samples;
 } loadid_drift_check_t;
 
 typedef struct {
@@ -57,6 +60,17 @@ void loadid_drift_check_reset(loadid_drift_check_t *c, int64_t t0_us, double for
  * zeroed wrench (eq. 7). */
 void loadid_drift_check_add(loadid_drift_check_t *c, int64_t t_us, const loadid_real_t A[60],
                             const loadid_real_t y[6]);
+
+/* One sample's instruments C (6 x 10, row-major; RIV's, eq. 20) beside its
+ * A, for loadid_drift_check_iv_pull. */
+void loadid_drift_check_add_instruments(loadid_drift_check_t *c, int64_t t_us,
+                                        const loadid_real_t A[60], const loadid_real_t C[60]);
+
+/* What the drift of r moves an IV estimate by: (sum C^T W A)^-1 (sum tau
+ * C^T W E6) rate, RIV's counterpart of r->pull (10 values). Returns 0, or
+ * -1 without instruments or when their sum is singular. */
+int loadid_drift_check_iv_pull(const loadid_drift_check_t *c, const loadid_drift_result_t *r,
+                               double pull[10]);
 
 /* The fit and the test over what was added; r->tested 0 when there are
  * too few blocks or the fit is singular. */

@@ -92,7 +92,8 @@ struct loadid_pipeline {
     /* does the offset drift after zeroing? (drift_check.h) */
     loadid_drift_check_t drift;
     loadid_drift_result_t drift_result;
-    int drift_significant; /* its pull counts in every method's phi_std */
+    int drift_significant;    /* the final estimates are corrected by its pull */
+    double drift_iv_pull[10]; /* RIV's pull (the least-squares one without instruments) */
     /* estimation */
     int64_t est_end_us, last_sample_us, since_publish;
     int64_t start_us;      /* START's utime */
@@ -367,7 +368,9 @@ static void fill_estimate(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
  * been taken out of the wrench; REFINED takes it out itself. */
 static void without_drift(const loadid_pipeline_t *p, int m, loadid_real_t *phi) {
     if (!p->drift_significant || m == p->refined_m) return;
-    for (int i = 0; i < 10; ++i) phi[i] -= (loadid_real_t)p->drift_result.pull[i];
+    const double *pull = p->drift_result.pull;
+    if (p->cfg.methods[m] == LOADID_METHOD_RIV) pull = p->drift_iv_pull;
+    for (int i = 0; i < 10; ++i) phi[i] -= (loadid_real_t)pull[i];
 }
 
 /* At DONE, a method the noise-ratio gate refused whose solution is unique
@@ -639,14 +642,16 @@ static void choose_primary(loadid_pipeline_t *p) {
 
 /* With zeroing: does the offset drift after it? (drift_check.h) When it
  * does, every on-line method's final estimate is taken as if the fitted
- * drift had been out of the wrench (exact for least squares: phi less the
- * drift's pull), phi_std gains what fitting it costs, and REFINED fits it
- * itself. */
+ * drift had been out of the wrench (phi less the drift's pull: exact for
+ * least squares, and for RIV its IV counterpart), phi_std gains what
+ * fitting it costs, and REFINED fits it itself. */
 static void check_drift(loadid_pipeline_t *p) {
     if (p->n_params != LOADID_NPHI) return;
     loadid_drift_result_t *r = &p->drift_result;
     loadid_drift_check_result(&p->drift, r);
     p->drift_significant = r->tested && r->p_value < DRIFT_P;
+    if (loadid_drift_check_iv_pull(&p->drift, r, p->drift_iv_pull) != 0)
+        memcpy(p->drift_iv_pull, r->pull, sizeof p->drift_iv_pull);
     if (p->drift_significant)
         note(p,
              "the F/T offset drifts since zeroing: %.3g %.3g %.3g N/s, %.3g %.3g %.3g N m/s "
@@ -1179,8 +1184,11 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
         return;
     }
     const int have_c = riv && data_matrix(p, &instr, C) == 0;
+    if (p->n_params == LOADID_NPHI) {
+        loadid_drift_check_add(&p->drift, s->t_us, A, y);
+        if (have_c) loadid_drift_check_add_instruments(&p->drift, s->t_us, A, C);
+    }
     if (p->refined) loadid_refined_sample(p->refined, s->t_us, y, lin, ang);
-    if (p->n_params == LOADID_NPHI) loadid_drift_check_add(&p->drift, s->t_us, A, y);
     for (int m = 0; m < p->num_methods; ++m) {
         const int is_riv = p->cfg.methods[m] == LOADID_METHOD_RIV;
         if ((is_riv && !have_c) || m == p->refined_m) continue;
