@@ -583,6 +583,8 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
         t_ref != INT64_MIN && fit_drift(r, n_params, zero_a, rep->levels.force, rep->levels.torque,
                                         t_ref, rep->drift, rep->drift_var) == 0;
     if (!rep->drift_fitted) memset(rep->drift, 0, sizeof rep->drift);
-    rep->samples = feed(r, n_params, zero_a, rep->drift, t_ref, est);
+    /* Without a drift the reference time is unused (drift 0; INT64_MIN
+     * would overflow the difference). */
+    rep->samples = feed(r, n_params, zero_a, rep->drift, rep->drift_fitted ? t_ref : 0, est);
     return rep->samples > 1 ? 0 : LOADID_E_NOT_EXCITED;
 }
