@@ -190,8 +190,8 @@ static void test_blocks_merge_and_short_windows_are_not_tested(void **state) {
 }
 
 /* RIV's pull: two RIV estimators on the same data, one fed y, one fed y
- * less the fitted drift; instruments C are A of a slightly different
- * motion (as the setpoint's is the encoders' but for the servo's lag). */
+ * less the fitted drift; instruments C are A off by up to 10 % (as the
+ * setpoint's motion is the encoders' but for the servo's lag). */
 static void test_iv_pull_equals_riv_on_the_detrended_wrench(void **state) {
     (void)state;
     loadid_rng_t rng;
@@ -201,7 +201,7 @@ static void test_iv_pull_equals_riv_on_the_detrended_wrench(void **state) {
     const int64_t t0_us = -200000;
     const int n = 1500;
     static loadid_real_t As[1500][60], Cs[1500][60], ys[1500][6];
-    const loadid_real_t spec_lag = (loadid_real_t)0.02;
+    const loadid_real_t spec_lag = (loadid_real_t)0.1;
     loadid_drift_check_reset(&check, t0_us, SIGMA_F, SIGMA_T);
     for (int k = 0; k < n; ++k) {
         const double t = (double)(k * 1000 - t0_us) * 1e-6;
@@ -241,10 +241,11 @@ static void test_iv_pull_equals_riv_on_the_detrended_wrench(void **state) {
     }
     print_message("IV pull against RIV on the detrended wrench: %.1e (the LS pull's: %.1e)\n",
                   worst, worst_ls);
-    /* RIV's prior ridge (Sigma_0 = 1e6 I) cancels in the difference: seen
-     * 6e-13. The least-squares pull differs by 7e-3. */
-    assert_true(worst < 1e-10);
-    assert_true(worst_ls > 100 * worst);
+    /* The IV sums take every 4th sample (drift_check.c): the sums' ends
+     * leave 3.2e-3 here (every sample: 6e-13, RIV's ridge cancelling).
+     * The least-squares pull is 3.6e-2 off. */
+    assert_true(worst < 1e-2);
+    assert_true(worst_ls > 3 * worst);
     for (int e = 0; e < 2; ++e) loadid_est_destroy(riv[e]);
     /* Without instruments there is no IV pull. */
     loadid_drift_check_reset(&check, t0_us, SIGMA_F, SIGMA_T);

@@ -39,7 +39,7 @@ typedef struct {
     double snap[LOADID_DRIFT_MAX_BLOCKS + 1][LOADID_DRIFT_SUMS]; /* cum at the blocks' ends */
     /* RIV's: sum C^T W A (10 x 10, row-major) and sum tau C^T W E6 (10 x 6) */
     double iv_m[100], iv_tau[60];
-    int64_t iv_samples;
+    int64_t iv_samples, iv_seen;
 } loadid_drift_check_t;
 
 typedef struct {
