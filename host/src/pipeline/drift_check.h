@@ -13,8 +13,7 @@
  * trajectories. Even so the test is liberal there (p < 1e-4 in 8 % of
  * the study's fast recordings with backlash, README); a drift of 0.05 N/s
  * on slow motion gave p under 3e-6. The per-sample work is sums (about
- * 500 multiply-adds, no allocation);
- * the test runs once, at DONE. */
+ * 250 multiply-adds, no allocation); the test runs once, at DONE. */
 #ifndef LOADID_PIPELINE_DRIFT_CHECK_H
 #define LOADID_PIPELINE_DRIFT_CHECK_H
 
