@@ -241,7 +241,6 @@ void loadid_drift_check_result(const loadid_drift_check_t *c, loadid_drift_resul
     if (loadid_spd_solve(V, x, 6)) return;
     double wald = 0;
     for (int i = 0; i < 6; ++i) wald += r->rate[i] * x[i];
-    r->wald = wald;
     r->p_value =
         loadid_f_upper_tail((double)(K - 6) / (6.0 * (double)(K - 1)) * wald, 6.0, (double)(K - 6));
     r->tested = 1;
