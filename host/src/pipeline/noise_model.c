@@ -158,12 +158,16 @@ int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double 
     double mean[6] = {0}, c[6][6] = {{0}}, lag[6] = {0}, f[6];
     for (int k = 0; k < n; ++k)
         for (int i = 0; i < 6; ++i) mean[i] += still_value(a, k, i) / n;
-    for (int k = 0; k < n; ++k)
+    double prev[6] = {0}; /* row k - 1 less the mean */
+    for (int k = 0; k < n; ++k) {
+        double d[6]; /* each row's values once, not once per pair */
+        for (int i = 0; i < 6; ++i) d[i] = still_value(a, k, i) - mean[i];
         for (int i = 0; i < 6; ++i) {
-            const double di = still_value(a, k, i) - mean[i];
-            for (int j = 0; j < 6; ++j) c[i][j] += di * (still_value(a, k, j) - mean[j]);
-            if (k > 0) lag[i] += di * (still_value(a, k - 1, i) - mean[i]);
+            for (int j = 0; j < 6; ++j) c[i][j] += d[i] * d[j];
+            if (k > 0) lag[i] += d[i] * prev[i];
         }
+        memcpy(prev, d, sizeof prev);
+    }
     const int dof = a->moved ? n - 4 : n - 1;
     for (int i = 0; i < 6; ++i) {
         double r = c[i][i] > 0 ? lag[i] / c[i][i] : 0.0;
