@@ -277,7 +277,8 @@ class Excitation {
 template <int N>
 CovInput cov_input(CovKind kind, const Excitation<N> &ex, const Real *t, int64_t samples,
                    const Real *phi, const loadid_est_config_t &cfg, const Real *iv_m = nullptr,
-                   const Real *iv_cc = nullptr) {
+                   const Real *iv_cc = nullptr, const double *iv_drift = nullptr,
+                   const Real *iv_b = nullptr) {
     return {kind, N, ex.gram().data(), ex.gram_torque().data(), t, samples, phi, iv_m, iv_cc,
             ex.row_sum().data(), ex.row_weight().data(),
             N == LOADID_NPHI ? cfg.offset_cov : nullptr, cfg.noise_sigma, cfg.noise_corr,
@@ -286,7 +287,7 @@ CovInput cov_input(CovKind kind, const Excitation<N> &ex, const Real *t, int64_t
             N == LOADID_NPHI_OFFSET && cfg.method != LOADID_METHOD_REFINED
                 ? ex.drift_sums().cross.data()
                 : nullptr,
-            ex.drift_sums().y.data(), ex.drift_sums().tt};
+            ex.drift_sums().y.data(), ex.drift_sums().tt, iv_drift, iv_b};
 }
 
 inline Vec6 row_weights(const loadid_est_config_t &cfg) {

@@ -45,6 +45,7 @@ class RecursiveLs final : public loadid_est {
         M_ = Eigen::Matrix<Real, N, N>::Identity() / cfg.p0; // RIV: Sigma^-1
         CC_.setZero();
         b_.setZero();
+        iv_drift_.setZero();
         U_.setIdentity(); // RLS: Sigma = U D U^T
         D_.setConstant(cfg.p0);
         excitation_.reset();
@@ -85,7 +86,8 @@ class RecursiveLs final : public loadid_est {
             return cov_input<N>(CovKind::LS, excitation_, excitation_.col_weight().data(), samples_,
                                 phi, cfg);
         return cov_input<N>(CovKind::IV, excitation_, excitation_.col_weight().data(), samples_,
-                            phi, cfg, M_.data(), CC_.data());
+                            phi, cfg, M_.data(), CC_.data(),
+                            N == LOADID_NPHI_OFFSET ? iv_drift_.data() : nullptr, b_.data());
     }
 
   private:
@@ -126,10 +128,13 @@ class RecursiveLs final : public loadid_est {
             M_ = lam * M_;
             CC_ = lam * CC_;
             b_ = lam * b_;
+            iv_drift_ *= double(lam);
         }
         M_.noalias() += CtLi.lazyProduct(B);
         CC_.noalias() += CtLi.lazyProduct(C); // C^T W C: the instruments' part of RIV's covariance
         b_.noalias() += CtLi * y;
+        if (N == LOADID_NPHI_OFFSET) // the drift witness's IV sums, on the excitation's clock
+            iv_drift_ += (double(samples_) * 1e-3) * CtLi.template cast<double>();
     }
 
     const bool instrumental_;
@@ -138,6 +143,7 @@ class RecursiveLs final : public loadid_est {
     Eigen::Matrix<Real, N, N> M_;
     Eigen::Matrix<Real, N, N> CC_;
     Vec<N> b_;
+    Eigen::Matrix<double, N, 6> iv_drift_; // sum_k t_k C_k^T W (uncertainty.hpp)
     Eigen::Matrix<Real, N, N> U_;
     Vec<N> D_;
     Excitation<N> excitation_;

@@ -100,6 +100,32 @@ Md drift_share(const CovInput &in, const Md &gs, const Vd &t) {
         h(n + r, n + r) = d * d * in.drift_tt;
         rhs(n + r) = d * in.drift_y[r];
     }
+    if (in.kind == CovKind::IV && in.iv_drift && in.iv_m && in.iv_b) {
+        // IV, unweighted: [C t E6]^T W [A t E6] [phi; rate] = [C t E6]^T W y,
+        // the rows' W = D^2; sum t W A and sum t W y from the drift sums.
+        Mw m(n2, n2);
+        Vw b(n2);
+        for (int j = 0; j < n; ++j) {
+            for (int i = 0; i < n; ++i) m(i, j) = static_cast<double>(in.iv_m[j * n + i]);
+            b(j) = static_cast<double>(in.iv_b[j]);
+        }
+        for (int r = 0; r < LOADID_NROWS; ++r) {
+            const double d = static_cast<double>(in.row_weight[r]);
+            for (int j = 0; j < n; ++j) {
+                m(j, n + r) = in.iv_drift[r * n + j];
+                m(n + r, j) = d * in.drift_cross[j * 6 + r] / t(j);
+            }
+            for (int c = 0; c < LOADID_NROWS; ++c)
+                m(n + r, n + c) = r == c ? d * d * in.drift_tt : 0;
+            b(n + r) = d * in.drift_y[r] / t(n);
+        }
+        const Eigen::PartialPivLU<Md> part(Md(m.topLeftCorner(n, n)));
+        const Vd iv16 = part.solve(Vd(b.head(n)));
+        const Vw iv22 = Eigen::PartialPivLU<Mw>(m).solve(b);
+        if (!iv16.allFinite() || !iv22.allFinite()) return Md::Zero(n, n);
+        const Vd dphi = iv16 - iv22.head(n);
+        return dphi * dphi.transpose();
+    }
     Eigen::LDLT<Mw> full(h);
     Eigen::LDLT<Md> part(Md(h.topLeftCorner(n, n)));
     if (full.info() != Eigen::Success || part.info() != Eigen::Success) return Md::Zero(n, n);

@@ -44,7 +44,10 @@
 // phi_std. The witness d = phi_16 - phi_22, the least-squares estimates
 // without and with a linear drift of the offset (6 columns t E6, from
 // sums the excitation keeps), is that drift's pull plus noise of
-// variance Var_22 - Var_16 (the cost of fitting it); d d^T is added.
+// variance Var_22 - Var_16 (the cost of fitting it); d d^T is added. IV
+// takes its own: the IV estimates without and with the drift columns,
+// which are their own instruments (the least-squares d left RIV's COM
+// 32 mm off at 8 mm phi_std on a slow 7-joint recording).
 #pragma once
 
 #include <cstdint>
@@ -89,6 +92,10 @@ struct CovInput {
     const double *drift_cross = nullptr;
     const double *drift_y = nullptr;
     double drift_tt = 0;
+    // IV, with the offset estimated: sum_k t_k C_k^T W (n x 6,
+    // column-major) and sum_k C_k^T W y_k (n); nullptr: the least-squares d.
+    const double *iv_drift = nullptr;
+    const Real *iv_b = nullptr;
 };
 
 // Fills std (n values) and *scale (s). Returns 0, or LOADID_E_NOT_EXCITED

@@ -15,6 +15,8 @@
  *    subtracted from every row (what a zeroing window's mean does), the
  *    coverage is back in the band with it and falls out of it without;
  *  - a low-pass filtered (AR(1)) wrench noise: the same with noise_corr;
+ *  - with the offset estimated and drifting, the drift witness d d^T:
+ *    least squares' d for LS, RIV's own IV d for RIV;
  *  - an undetermined direction (a still pose, exact data) gives
  *    LOADID_E_NOT_EXCITED and +Inf; with noisy accelerations the same pose
  *    is regular but its inertia std is many times the inertia itself.
@@ -278,6 +280,98 @@ static void test_drift_witness_equals_least_squares(void **state) {
     assert_true(worst < 1e-6);
     assert_true(share_max > 0.5); /* the drift dominates here */
     assert_true(drift_worst < 0.02);
+    dataset_free(&d);
+}
+
+/* The same for RIV, with noise in A as well: its witness is its own
+ * pull, d = phi_16 - phi_22 of the IV estimates with instruments C and
+ * [C t_k E6] (the drift columns their own instruments), and the rest of
+ * its variance s^2 M^-1 C^T W C M^-T, M = sum C^T W A, s^2 the mean of
+ * the force and torque rows' weighted residual variances; all computed
+ * here from the rows. The least-squares d, which RIV had, is another
+ * number: the test asserts the two differ by more than the bound. */
+static void test_riv_drift_witness_is_its_own_pull(void **state) {
+    (void)state;
+    dataset_spec_t spec = {.seed = 12, .n_samples = 1500, .n_params = 16, .noise = kPaperNoise};
+    dataset_t d;
+    assert_int_equal(dataset_make(&spec, &d), 0);
+    const double drift[6] = {0.3, -0.2, 0.25, 0.02, -0.015, 0.01}; /* per second */
+    for (int k = 0; k < d.n_samples; ++k)
+        for (int r = 0; r < 6; ++r) d.y[6 * k + r] += (loadid_real_t)(drift[r] * k * 1e-3);
+    loadid_est_config_t cfg;
+    dataset_config(&spec, LOADID_METHOD_RIV, &cfg);
+    loadid_est_t *est;
+    assert_int_equal(loadid_est_create(&cfg, &est), 0);
+    assert_int_equal(dataset_feed(&d, est, 0, d.n_samples), 0);
+    loadid_real_t phi[16], std[16], scale;
+    assert_int_equal(loadid_est_estimate(est, phi, NULL), 0);
+    assert_int_equal(loadid_est_uncertainty(est, phi, std, &scale), 0);
+    loadid_est_destroy(est);
+    enum { N = 16, N2 = 22 };
+    /* M22 = sum c a^T w over rows (c, a: [C row, t e_r], [A row, t e_r]);
+     * the LS normal equations beside it; C^T W C. */
+    static double M[N2 * N2], H[N2 * N2], CC[N * N], inv[N2 * N2], work[N2 * N2];
+    double bm[N2] = {0}, bh[N2] = {0}, rss[2] = {0};
+    memset(M, 0, sizeof M);
+    memset(H, 0, sizeof H);
+    memset(CC, 0, sizeof CC);
+    for (int k = 0; k < d.n_samples; ++k) {
+        const loadid_real_t *A = dataset_A(&d, k), *C = dataset_C(&d, k), *y = dataset_y(&d, k);
+        for (int r = 0; r < 6; ++r) {
+            const double w = 1.0 / ((double)cfg.row_sigma[r] * (double)cfg.row_sigma[r]);
+            double a[N2] = {0}, c[N2] = {0}, e = y[r];
+            for (int i = 0; i < N; ++i)
+                a[i] = A[r * N + i], c[i] = C[r * N + i], e -= a[i] * phi[i];
+            a[N + r] = c[N + r] = k * 1e-3;
+            for (int i = 0; i < N2; ++i) {
+                bm[i] += w * c[i] * y[r];
+                bh[i] += w * a[i] * y[r];
+                for (int j = 0; j < N2; ++j)
+                    M[i * N2 + j] += w * c[i] * a[j], H[i * N2 + j] += w * a[i] * a[j];
+            }
+            for (int i = 0; i < N; ++i)
+                for (int j = 0; j < N; ++j) CC[i * N + j] += w * c[i] * c[j];
+            rss[r >= 3] += w * e * e;
+        }
+    }
+    /* x = K^-1 b for the leading n x n block of K (n = 16) and all of it. */
+    double x[2][2][N2]; /* [IV, LS][16, 22] */
+    static double inv16[2][N * N];
+    for (int m = 0; m < 2; ++m) {
+        const double *K = m ? H : M, *b = m ? bh : bm;
+        for (int big = 0; big < 2; ++big) {
+            const int n = big ? N2 : N;
+            for (int i = 0; i < n; ++i)
+                for (int j = 0; j < n; ++j) work[i * n + j] = K[i * N2 + j];
+            invert(work, n, inv);
+            if (!big) memcpy(inv16[m], inv, sizeof inv16[m]);
+            for (int i = 0; i < n; ++i) {
+                x[m][big][i] = 0;
+                for (int j = 0; j < n; ++j) x[m][big][i] += inv[i * n + j] * b[j];
+            }
+        }
+    }
+    const double half = (6.0 * d.n_samples - N) / 2, s2 = (rss[0] + rss[1]) / half / 2;
+    double worst = 0, share_max = 0, ls_apart = 0;
+    for (int i = 0; i < 10; ++i) {
+        double var = 0; /* s^2 (Mi CC Mi^T)_ii */
+        for (int a = 0; a < N; ++a)
+            for (int c = 0; c < N; ++c)
+                var += inv16[0][i * N + a] * CC[a * N + c] * inv16[0][i * N + c];
+        var *= s2;
+        const double div = x[0][0][i] - x[0][1][i], dls = x[1][0][i] - x[1][1][i];
+        const double wit = div * div;
+        worst = fmax(worst, fabs((double)std[i] * std[i] - var - wit) / (var + wit));
+        share_max = fmax(share_max, wit / (var + wit));
+        ls_apart = fmax(ls_apart, fabs(dls * dls - wit) / (var + wit));
+    }
+    print_message(
+        "RIV drift witness: its share of the variance up to %.2f; std^2 against IV's sandwich "
+        "plus d_IV^2: worst relative difference %.2e (with the least-squares d instead: %.2e)\n",
+        share_max, worst, ls_apart);
+    assert_true(worst < 1e-6);
+    assert_true(share_max > 0.5);
+    assert_true(ls_apart > 1e-3);
     dataset_free(&d);
 }
 
@@ -564,6 +658,7 @@ int main(void) {
         cmocka_unit_test(test_ls_std_equals_normal_equations),
         cmocka_unit_test(test_ls_coverage_noise_in_y),
         cmocka_unit_test(test_drift_witness_equals_least_squares),
+        cmocka_unit_test(test_riv_drift_witness_is_its_own_pull),
         cmocka_unit_test(test_tls_coverage_noise_in_a),
         cmocka_unit_test(test_riv_coverage_noise_in_a),
         cmocka_unit_test(test_zeroing_noise_refused),
