@@ -30,7 +30,7 @@ MEAS_SIGMA = 2 * math.pi / 2**20 / math.sqrt(12)
 INIT_SIGMA_VEL, INIT_SIGMA_ACC = 1.0, 10.0
 
 
-def settle_steps(jerk_psd=10.0, meas_sigma=MEAS_SIGMA, dt=1e-3, factor=1.5):
+def settle_steps(jerk_psd=1.0, meas_sigma=MEAS_SIGMA, dt=1e-3, factor=1.5):
     """Updates after a (re)start before the filter serves a sample."""
     F = np.array([[1, dt, dt * dt / 2], [0, 1, dt], [0, 0, 1]])
     d2, d3 = dt * dt, dt ** 3

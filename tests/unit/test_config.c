@@ -172,10 +172,10 @@ static void assert_defaults(const loadid_config_t *c) {
     ASSERT_EQ_D(c->noise_omega, 0.02);
     ASSERT_EQ_D(c->omega_typical, 2.0);
 
-    /* jerk_psd: 10 behind the fixed-lag smoother (config.c); meas_sigma:
+    /* jerk_psd: 1 behind the fixed-lag smoother (config.c); meas_sigma:
      * joint_filter.h's documented default, with a relative tolerance for
      * the float core (LOADID_SCALAR=float) */
-    ASSERT_EQ_D(c->kalman_jerk_psd, 10.0);
+    ASSERT_EQ_D(c->kalman_jerk_psd, 1.0);
     const double sigma = 2 * 3.14159265358979323846 / 1048576.0 / sqrt(12.0);
     assert_true(fabs(c->kalman_meas_sigma - sigma) <= 1e-6 * sigma);
     ASSERT_EQ_D(c->kalman_max_joint_age_s, 0.005);

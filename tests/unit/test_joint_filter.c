@@ -723,7 +723,7 @@ static void test_noise_sigma_is_the_noise_response(void **state) {
 
 /* The fixed-lag smoother read between updates, where the sensor samples
  * are (0.37 ms after each joint state, as loadid-sim and the JR3 on CAN
- * are), with the pipeline's settings (jerk_psd 10, 50 steps of lag): qdd
+ * are), with the pipeline's settings (jerk_psd 1, 50 steps of lag): qdd
  * within the RTS smoother's own error at the updates (0.038 rad/s^2 on
  * this multi-sine), and qd and q close. Holding qdd constant from the
  * update before, as the model's mean does, gave 0.16 rad/s^2; longer lags
@@ -732,7 +732,7 @@ static void test_noise_sigma_is_the_noise_response(void **state) {
 static void test_lagged_between_updates(void **state) {
     (void)state;
     loadid_jf_config_t c = default_config();
-    c.jerk_psd = 10;
+    c.jerk_psd = 1;
     series_t *s = &g_series;
     make_series(s, 0, 1);
     run_smoother(&c, s, &g_smooth);
@@ -762,9 +762,9 @@ static void test_lagged_between_updates(void **state) {
                 "%.2e rad/s, q %.2e rad\n",
                 lag, offsets[o], qdd, rts, qd, q);
             /* 50 steps: the RTS figure (measured 1.00x at every offset); 10
-             * steps are not enough for jerk_psd 10 (measured 4x). */
+             * steps are not enough for jerk_psd 1 (measured 2.1-6.2x, qd 1.3e-3). */
             if (lag == 50) assert_true(qdd < 1.3 * rts + (IS_FLOAT ? 0.02 : 0));
-            assert_true(qd < 1e-3 && q < 2e-5);
+            if (lag == 50) assert_true(qd < 1e-3 && q < 2e-5);
         }
     }
 }
@@ -809,7 +809,7 @@ static int settle_reference(const loadid_jf_config_t *c, double dt) {
 }
 
 /* A stalled stream (0.3 s without joint states, over max_step_us: the
- * filter restarts) with the daemon's settings (jerk_psd 10, 50 steps of
+ * filter restarts) with the daemon's settings (jerk_psd 1, 50 steps of
  * lag, max_step_us = max_joint_age 5 ms): a sample more than 5 ms from the
  * joint states before the stall, or served by one of the first settle
  * updates after it, is refused (LOADID_E_STALE); every other is served
@@ -819,7 +819,7 @@ static int settle_reference(const loadid_jf_config_t *c, double dt) {
 static void test_restart_settles_before_serving(void **state) {
     (void)state;
     loadid_jf_config_t c = default_config();
-    c.jerk_psd = 10;
+    c.jerk_psd = 1;
     c.lag_steps = 50;
     c.max_step_us = 5000;
     loadid_jf_t *jf = NULL;

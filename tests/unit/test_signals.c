@@ -367,7 +367,7 @@ static loadid_signals_t *make_probing(int probe, int64_t lag_us) {
     loadid_signals_config_t cfg;
     loadid_signals_config_default(&cfg);
     cfg.source = LOADID_SIGNALS_KF;
-    cfg.measured.jerk_psd = cfg.setpoint.jerk_psd = 10;   /* the daemon's, behind the smoother */
+    cfg.measured.jerk_psd = cfg.setpoint.jerk_psd = 1;    /* the daemon's, behind the smoother */
     cfg.measured.lag_steps = cfg.setpoint.lag_steps = 50; /* until the probe says */
     /* A step over the joint data's age restarts the filters (as setup.c sets it). */
     cfg.measured.max_step_us = cfg.setpoint.max_step_us = cfg.max_joint_age_us;

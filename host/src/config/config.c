@@ -100,14 +100,16 @@ void loadid_config_default(loadid_config_t *cfg) {
     loadid_jf_config_default(&jf);
     loadid_signals_config_t sig;
     loadid_signals_config_default(&sig);
-    /* 10, not the causal filter's 1e3: behind the fixed-lag smoother a
-     * narrower bandwidth (62 Hz) costs no lag, and it keeps out what the
-     * motor-side encoders see but the load does not (backlash): on-line
-     * RTLS with kf went from +0.39 % to -0.16 % in mass and from 1.8 % to
-     * 1.2 % in inertia on the offline tests' recording (REFINED, which
-     * picks its smoother's bandwidth from the data, chose 1 there). With
+    /* 1, not the causal filter's 1e3: behind the fixed-lag smoother a
+     * narrower bandwidth (42 Hz) costs no lag, keeps out what the
+     * motor-side encoders see but the load does not (backlash) and puts
+     * less noise into a - g. REFINED, which picks its smoother's bandwidth
+     * from the wrench fit, chooses 1 on the 2 Hz study trajectories and
+     * 0.1 on slow ones; against 10, 1 left the study's fast cells as they
+     * were and on 30 slow recordings (0.1-0.4 Hz, zeroing while moving)
+     * took RTLS's largest mass error from 13.8 % to 3.4 %. With
      * kalman.lag_s 0, 1e3 is the causal filter's best (joint_filter.h). */
-    cfg->kalman_jerk_psd = 10.0;
+    cfg->kalman_jerk_psd = 1.0;
     cfg->kalman_meas_sigma = (double)jf.meas_sigma;
     cfg->kalman_max_joint_age_s = (double)sig.max_joint_age_us / 1e6;
     cfg->kalman_lag_s = 0.05;

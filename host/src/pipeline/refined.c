@@ -504,9 +504,10 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     c.noise_given &= LOADID_NOISE_GIVEN_FORCE | LOADID_NOISE_GIVEN_TORQUE;
     loadid_noise_combine(&c, 0, 0, channel, channel_source, 1, 1, 1, &rep->levels);
 
-    /* The smoother's bandwidth from the data: of the configured jerk PSD
-     * and four lower ones (each a factor 10, the bandwidth 1.47 times
-     * lower), the one whose kinematics explain the measured wrench best. A
+    /* The smoother's bandwidth from the data: of ten times the configured
+     * jerk PSD, it and three lower ones (each a factor 10, the bandwidth
+     * 1.47 times lower), the one whose kinematics explain the measured
+     * wrench best. A
      * smoother too wide keeps what the encoders see but the load does not
      * (backlash, noise); one too narrow blunts the motion. */
     loadid_jf_config_t jf = r->jf;
@@ -514,7 +515,7 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     int64_t used = 0;
     int best_count = 0;
     for (int trial = 0; trial < 5; ++trial) {
-        jf.jerk_psd = (loadid_real_t)((double)r->jf.jerk_psd * pow(10.0, -trial));
+        jf.jerk_psd = (loadid_real_t)((double)r->jf.jerk_psd * pow(10.0, 1 - trial));
         const int64_t n = kinematics(r, &jf);
         if (n < 2) continue;
         const double rss = fit_residual(r, n_params, zero_a, rep->levels.force, rep->levels.torque,
