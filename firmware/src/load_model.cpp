@@ -49,7 +49,7 @@ extern "C" void loadid_model_config_default(loadid_model_config_t *cfg) {
     if (!cfg) return;
     cfg->mass_rel_std = Real(0.05);
     cfg->com_std = Real(0.005);
-    cfg->inertia_rel_std = Real(0.3);
+    cfg->inertia_rel_std = Real(0.15);
     cfg->max_gyration = Real(0.5);
     cfg->min_snr = Real(1);
     cfg->fallback_density = Real(2700);

@@ -176,6 +176,20 @@ static void test_groups_and_bad_input(void **state) {
     std[0] = 0.06;
     assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, 0);
+    /* Inertia: its largest element std against 15 % of the inertia's
+     * scale, the mean principal moment about the COM (tr(I_C) / 3 =
+     * m (a^2 + b^2 + c^2) / 18 for the box) or the aluminium sphere's if
+     * larger: 14 % identified, 16 % not. */
+    const double r_sphere = cbrt(3 * 1.0 / (4 * 3.14159265358979323846 * 2700.0));
+    const double scale =
+        fmax((0.1 * 0.1 + 0.06 * 0.06 + 0.03 * 0.03) / 18, 0.4 * r_sphere * r_sphere);
+    for (int k = 0; k < 2; ++k) {
+        small_std(phi, std);
+        std[4 + 2 * k] = (loadid_real_t)((k ? 0.16 : 0.14) * scale);
+        assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
+        assert_int_equal(m.identified,
+                         LOADID_IDENT_MASS | LOADID_IDENT_COM | (k ? 0 : LOADID_IDENT_INERTIA));
+    }
     /* NaN std: not identified, never a crash. */
     small_std(phi, std);
     std[7] = NAN;

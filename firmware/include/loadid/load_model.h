@@ -51,7 +51,7 @@ enum { LOADID_IDENT_MASS = 1, LOADID_IDENT_COM = 2, LOADID_IDENT_INERTIA = 4 };
 typedef struct {
     loadid_real_t mass_rel_std;     /* [-], default 0.05 */
     loadid_real_t com_std;          /* [m], default 0.005 */
-    loadid_real_t inertia_rel_std;  /* [-], default 0.3 */
+    loadid_real_t inertia_rel_std;  /* [-], default 0.15 */
     loadid_real_t max_gyration;     /* [m], default 0.5 */
     loadid_real_t min_snr;          /* [-], default 1 */
     loadid_real_t fallback_density; /* [kg/m^3], default 2700 (aluminium) */

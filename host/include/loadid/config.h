@@ -221,7 +221,7 @@ typedef struct {
      * density of an unidentified inertia */
     double model_mass_rel_std;     /* [-], default 0.05 */
     double model_com_std;          /* [m], default 0.005 */
-    double model_inertia_rel_std;  /* [-], default 0.3 */
+    double model_inertia_rel_std;  /* [-], default 0.15 */
     double model_max_gyration;     /* [m], default 0.5 */
     double model_fallback_density; /* [kg/m^3], default 2700 */
     double model_min_snr;          /* [-], default 1: the inertia's torque

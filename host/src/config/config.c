@@ -120,7 +120,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->kalman_alpha_sigma = 1.0;
     cfg->model_mass_rel_std = 0.05;
     cfg->model_com_std = 0.005;
-    cfg->model_inertia_rel_std = 0.3;
+    cfg->model_inertia_rel_std = 0.15;
     cfg->model_max_gyration = 0.5;
     cfg->model_fallback_density = 2700.0;
     cfg->model_min_snr = 1.0;
