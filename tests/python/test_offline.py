@@ -283,6 +283,38 @@ def test_zeroing_while_the_load_moves(tmp_path):
         assert est["phi_std"][0] / m_t < 0.02, (est["method"], est["phi_std"])
 
 
+def test_zeroing_while_moving_averages_the_samples_with_joint_data(tmp_path, lcmtypes):
+    """The same with the joint states stalled from 40 to 120 ms (ZERO at
+    50 ms): the zeroing samples without joint data, or served by the
+    restarted filters while they settle, have no eq. (6) term, so the
+    wrench mean y0 must leave them out as well (moving, the two means
+    must be of the same samples). Averaged over all 200 samples while
+    zero_a had 115, every method's mass was 30 % off, claimed at 0.6 %
+    phi_std; seen now 0.6 % (z 1.0). The count comes from joint_stall.py,
+    which says which samples the daemon refuses."""
+    rec = slow_recording(tmp_path, "", 1, "simulation:\n  zero: true\n  still_s: 0.05\n"
+                         "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
+                         "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
+                         "  noise:\n    angular: 0.0\n", "--damage", "stall-joints=0.04:0.12")
+    truth = read_truth(rec)
+    zero = int(truth["times.zero"])
+    times = [t for t in joint_stall.sample_times(rec) if zero <= t < zero + 200_000]
+    refused = joint_stall.refused(times, joint_stall.joint_times(rec, lcmtypes))
+    assert 50 <= len(refused) < len(times) - 10, (len(refused), len(times))
+    cfg = write_config(tmp_path / "c.yaml", SLOW + "estimation:\n  methods: [RTLS, RLS, REFINED]\n")
+    result, err = offline(cfg, rec, "--verbose")
+    assert "zeroing: the load moved" in err, err
+    assert f"offset from {len(times) - len(refused)} samples" in err, (len(times), len(refused), err)
+    phi, _ = truth_phi(rec)
+    m_t, c_t, _ = physical(phi)
+    for est in result:
+        mass_err = abs(est["mass"] - m_t) / m_t
+        com_err = np.linalg.norm(np.array(est["com"]) - c_t)
+        print(est["method"], "mass", mass_err, "com", com_err, "std", est["phi_std"][0])
+        assert mass_err < 0.015 and com_err < 0.004, (est["method"], est["mass"], est["com"])
+        assert mass_err <= 3 * est["phi_std"][0] / m_t, (est["method"], est["phi_std"])
+
+
 def test_zeroed_offset_drift_is_found_and_taken_out(tmp_path):
     """UR5, seed 2 of the real-data-like case with ZERO while it moves and
     the offset model zeroing: the F/T offset drifts (0.05, -0.04, 0.03

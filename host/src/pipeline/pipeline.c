@@ -83,8 +83,10 @@ struct loadid_pipeline {
     double zero_g2_sum, zero_w2_sum; /* sum |g|^2, |omega|^2: did it move? */
     int64_t zero_t_first_us;         /* the zeroing window's first sample */
     double zero_t_sum;               /* and its samples' time after it, summed [us] */
-    double noise_corr[2];            /* the zeroing window's (set_zeroing_noise) */
-    int zeroed;                      /* y0, g_init and zero_a are valid */
+    /* the wrench and time sums over the samples zero_a has (kinematics) */
+    double zero_kin_sum[6], zero_kin_t_sum;
+    double noise_corr[2]; /* the zeroing window's (set_zeroing_noise) */
+    int zeroed;           /* y0, g_init and zero_a are valid */
     loadid_real_t y0[6], g_init[3];
     /* eq. (6) averaged over the zeroing window, what y0 holds of the load
      * (loadid_regressor_subtract_zeroing) */
@@ -721,11 +723,6 @@ static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
                   "zeroing: no joint state near the samples (g_init needs the kinematics)");
         return;
     }
-    for (int i = 0; i < 6; ++i) p->y0[i] = (loadid_real_t)(p->zero_sum[i] / (double)p->zero_n);
-    for (int i = 0; i < 3; ++i)
-        p->g_init[i] = (loadid_real_t)(p->zero_g_sum[i] / (double)p->zero_g_n);
-    for (int i = 0; i < 60; ++i)
-        p->zero_a[i] = (loadid_real_t)(p->zero_a_sum[i] / (double)p->zero_g_n);
     /* Did the load turn while it was zeroed? Gravity in S comes from the
      * encoders' positions alone (a count's dither moves it by some 1e-5
      * m/s^2), omega from their rates. */
@@ -734,7 +731,33 @@ static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
     for (int i = 0; i < 3; ++i) g2 += p->zero_g_sum[i] * p->zero_g_sum[i] / (n * n);
     const double g_spread = sqrt(fmax(p->zero_g2_sum / n - g2, 0.0)),
                  w_rms = sqrt(p->zero_w2_sum / n);
-    if (g_spread > ZERO_MOVED_G || w_rms > ZERO_MOVED_W) {
+    const int moved = g_spread > ZERO_MOVED_G || w_rms > ZERO_MOVED_W;
+    if (moved && p->zero_g_n < p->zero_n) {
+        /* y0 holds eq. (6) averaged over its samples, zero_a over those
+         * with kinematics: moving, the two must be the same samples. On
+         * slow motion the estimate rests on gravity turning by a few
+         * hundredths of a m/s^2 in S, and 10 samples of 200 without joint
+         * data (a stall before ZERO) moved zero_a by 9e-4 m/s^2 and the
+         * mass of every method by 3 %, claimed at 0.6 % phi_std. */
+        if (p->zero_g_n < MIN_ZEROING_SAMPLES) {
+            char why[160];
+            snprintf(why, sizeof why,
+                     "zeroing: the load moved and %lld samples of the window had joint data (at "
+                     "least %d needed)",
+                     (long long)p->zero_g_n, MIN_ZEROING_SAMPLES);
+            set_state(p, utime, LOADID_STATE_FAILED, why);
+            return;
+        }
+        memcpy(p->zero_sum, p->zero_kin_sum, sizeof p->zero_sum);
+        p->zero_t_sum = p->zero_kin_t_sum;
+        p->zero_n = p->zero_g_n;
+    }
+    for (int i = 0; i < 6; ++i) p->y0[i] = (loadid_real_t)(p->zero_sum[i] / (double)p->zero_n);
+    for (int i = 0; i < 3; ++i)
+        p->g_init[i] = (loadid_real_t)(p->zero_g_sum[i] / (double)p->zero_g_n);
+    for (int i = 0; i < 60; ++i)
+        p->zero_a[i] = (loadid_real_t)(p->zero_a_sum[i] / (double)p->zero_g_n);
+    if (moved) {
         loadid_noise_acc_moved(&p->noise);
         note(p,
              "zeroing: the load moved (gravity in S spread %.3g m/s^2, omega %.3g rad/s RMS): "
@@ -974,7 +997,8 @@ static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const c
             memset(p->zero_sum, 0, sizeof p->zero_sum);
             memset(p->zero_g_sum, 0, sizeof p->zero_g_sum);
             memset(p->zero_a_sum, 0, sizeof p->zero_a_sum);
-            p->zero_g2_sum = p->zero_w2_sum = p->zero_t_sum = 0;
+            memset(p->zero_kin_sum, 0, sizeof p->zero_kin_sum);
+            p->zero_g2_sum = p->zero_w2_sum = p->zero_t_sum = p->zero_kin_t_sum = 0;
             p->zeroed = 0;
             p->zero_seen = 1;
             loadid_noise_acc_reset_still(&p->noise);
@@ -1159,6 +1183,8 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
                 p->zero_w2_sum += (double)k.omega[i] * (double)k.omega[i];
             }
             for (int i = 0; i < 60; ++i) p->zero_a_sum[i] += (double)a[i];
+            for (int i = 0; i < 6; ++i) p->zero_kin_sum[i] += (double)y[i];
+            p->zero_kin_t_sum += (double)(s->t_us - p->zero_t_first_us);
             p->zero_g_n++;
         }
         return;
