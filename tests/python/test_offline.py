@@ -251,6 +251,28 @@ def test_slow_motion_gives_the_mass_where_only_the_weakest_direction_is_noise(tm
         assert abs(est["mass"] - m_t) <= 3 * est["phi_std"][0], (est["mass"], est["phi_std"])
 
 
+MOVING_ZERO = ("simulation:\n  zero: true\n  still_s: 0.05\n"
+               "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
+               "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
+               "  noise:\n    angular: 0.0\n")
+
+
+def assert_mass_and_com(result, rec, mass_rel, com_m, key=None):
+    """Every method's mass within mass_rel of the truth and its COM within
+    com_m, and its mass error within 3 phi_std; key "model": the load
+    model's values. Returns result."""
+    phi, _ = truth_phi(rec)
+    m_t, c_t, _ = physical(phi)
+    for est in result:
+        src = est[key] if key else est
+        mass_err = abs(src["mass"] - m_t) / m_t
+        com_err = np.linalg.norm(np.array(src["com"]) - c_t)
+        print(est["method"], "mass", mass_err, "com", com_err, "std", est["phi_std"][0])
+        assert mass_err < mass_rel and com_err < com_m, (est["method"], mass_err, com_err)
+        assert mass_err <= 3 * est["phi_std"][0] / m_t, (est["method"], est["phi_std"])
+    return result
+
+
 def test_zeroing_while_the_load_moves(tmp_path):
     """ZERO while the RX60 already moves (no still phase; the slow
     real-data-like motion, without drift), offset model zeroing: the
@@ -262,25 +284,15 @@ def test_zeroing_while_the_load_moves(tmp_path):
     leaves (the still window's spread said 0.59 N for 0.1 N, and phi_std
     17 % for a 0.5 % error). Seen: RTLS and RLS 0.1 % and 0.5 mm off,
     phi_std of the mass 0.5 %, the force noise 0.097 N."""
-    rec = slow_recording(tmp_path, "", 1, "simulation:\n  zero: true\n  still_s: 0.05\n"
-                         "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
-                         "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
-                         "  noise:\n    angular: 0.0\n")
+    rec = slow_recording(tmp_path, "", 1, MOVING_ZERO)
     cfg = write_config(tmp_path / "c.yaml", SLOW + "estimation:\n  methods: [RTLS, RLS, REFINED]\n")
     result, err = offline(cfg, rec, "--verbose")
     assert "zeroing: the load moved" in err, err
     assert "drifts since zeroing" not in err, err
     force_noise = float(err.split("noise (zeroing): f ")[1].split(" N")[0])
     assert abs(force_noise / 0.1 - 1) < 0.15, force_noise
-    phi, _ = truth_phi(rec)
-    m_t, c_t, _ = physical(phi)
-    for est in result:
-        mass_err = abs(est["mass"] - m_t) / m_t
-        com_err = np.linalg.norm(np.array(est["com"]) - c_t)
-        print(est["method"], "mass", mass_err, "com", com_err, "std", est["phi_std"][0])
-        assert mass_err < 0.015 and com_err < 0.005, (est["method"], est["mass"], est["com"])
-        assert mass_err <= 3 * est["phi_std"][0] / m_t, (est["method"], est["phi_std"])
-        assert est["phi_std"][0] / m_t < 0.02, (est["method"], est["phi_std"])
+    for est in assert_mass_and_com(result, rec, 0.015, 0.005):
+        assert est["phi_std"][0] / est["mass"] < 0.02, (est["method"], est["phi_std"])
 
 
 def test_zeroing_while_moving_averages_the_samples_with_joint_data(tmp_path, lcmtypes):
@@ -292,10 +304,7 @@ def test_zeroing_while_moving_averages_the_samples_with_joint_data(tmp_path, lcm
     zero_a had 115, every method's mass was 30 % off, claimed at 0.6 %
     phi_std; seen now 0.6 % (z 1.0). The count comes from joint_stall.py,
     which says which samples the daemon refuses."""
-    rec = slow_recording(tmp_path, "", 1, "simulation:\n  zero: true\n  still_s: 0.05\n"
-                         "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
-                         "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
-                         "  noise:\n    angular: 0.0\n", "--damage", "stall-joints=0.04:0.12")
+    rec = slow_recording(tmp_path, "", 1, MOVING_ZERO, "--damage", "stall-joints=0.04:0.12")
     truth = read_truth(rec)
     zero = int(truth["times.zero"])
     times = [t for t in joint_stall.sample_times(rec) if zero <= t < zero + 200_000]
@@ -305,14 +314,7 @@ def test_zeroing_while_moving_averages_the_samples_with_joint_data(tmp_path, lcm
     result, err = offline(cfg, rec, "--verbose")
     assert "zeroing: the load moved" in err, err
     assert f"offset from {len(times) - len(refused)} samples" in err, (len(times), len(refused), err)
-    phi, _ = truth_phi(rec)
-    m_t, c_t, _ = physical(phi)
-    for est in result:
-        mass_err = abs(est["mass"] - m_t) / m_t
-        com_err = np.linalg.norm(np.array(est["com"]) - c_t)
-        print(est["method"], "mass", mass_err, "com", com_err, "std", est["phi_std"][0])
-        assert mass_err < 0.015 and com_err < 0.004, (est["method"], est["mass"], est["com"])
-        assert mass_err <= 3 * est["phi_std"][0] / m_t, (est["method"], est["phi_std"])
+    assert_mass_and_com(result, rec, 0.015, 0.004)
 
 
 def test_zeroed_offset_drift_is_found_and_taken_out(tmp_path):
@@ -325,11 +327,7 @@ def test_zeroed_offset_drift_is_found_and_taken_out(tmp_path):
     are corrected by its pull and REFINED fits it. Seen: mass within
     0.2 %, COM within 3.7 mm, the force rates within 0.008 N/s."""
     rec = slow_recording(tmp_path, f"robot:\n  urdf: {UR5}\n", 2,
-                         "simulation:\n  zero: true\n  still_s: 0.05\n"
-                         "  drift: [0.05, -0.04, 0.03, 0.002, -0.002, 0.001]\n"
-                         "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
-                         "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
-                         "  noise:\n    angular: 0.0\n")
+                         MOVING_ZERO + "  drift: [0.05, -0.04, 0.03, 0.002, -0.002, 0.001]\n")
     cfg = write_config(tmp_path / "c.yaml", f"robot:\n  urdf: {UR5}\n" + SLOW +
                        "estimation:\n  methods: [RTLS, RIV, RLS, REFINED]\n")
     result, err = offline(cfg, rec, "--verbose")
@@ -337,14 +335,7 @@ def test_zeroed_offset_drift_is_found_and_taken_out(tmp_path):
     rates = [float(v) for v in line.split(" N/s")[0].split()]
     assert np.abs(np.array(rates) - [0.05, -0.04, 0.03]).max() < 0.015, line
     assert "REFINED: the offset drifts" in err, err
-    phi, _ = truth_phi(rec)
-    m_t, c_t, _ = physical(phi)
-    for est in result:
-        mass_err = abs(est["model"]["mass"] - m_t) / m_t
-        com_err = np.linalg.norm(np.array(est["model"]["com"]) - c_t)
-        print(est["method"], "mass", mass_err, "com", com_err, "std", est["phi_std"][0])
-        assert mass_err < 0.006 and com_err < 0.008, (est["method"], mass_err, com_err)
-        assert mass_err <= 3 * est["phi_std"][0] / m_t, (est["method"], est["phi_std"])
+    for est in assert_mass_and_com(result, rec, 0.006, 0.008, key="model"):
         assert "inertia" not in est["identified"], (est["method"], est["identified"])
 
 

@@ -74,9 +74,10 @@ static void invert(double *M, int n, double *inv) {
     }
 }
 
-/* An estimator of cfg fed all of d: its estimate, phi_std and scale. */
-static void fit(const dataset_t *d, const loadid_est_config_t *cfg, loadid_real_t phi[10],
-                loadid_real_t std[10], loadid_real_t *scale) {
+/* An estimator of cfg fed all of d: its estimate, phi_std (n_params
+ * values each) and scale. */
+static void fit(const dataset_t *d, const loadid_est_config_t *cfg, loadid_real_t *phi,
+                loadid_real_t *std, loadid_real_t *scale) {
     loadid_est_t *est;
     assert_int_equal(loadid_est_create(cfg, &est), 0);
     assert_int_equal(dataset_feed(d, est, 0, d->n_samples), 0);
@@ -200,6 +201,16 @@ static void test_ls_std_equals_normal_equations(void **state) {
     dataset_free(&d);
 }
 
+/* The offset's drift of the two drift tests, per second. */
+static const double kDrift[6] = {0.3, -0.2, 0.25, 0.02, -0.015, 0.01};
+
+/* spec's data set with kDrift t_k added to y (t_k = k / 1000). */
+static void make_drifting(const dataset_spec_t *spec, dataset_t *d) {
+    assert_int_equal(dataset_make(spec, d), 0);
+    for (int k = 0; k < d->n_samples; ++k)
+        for (int r = 0; r < 6; ++r) d->y[6 * k + r] += (loadid_real_t)(kDrift[r] * k * 1e-3);
+}
+
 /* With the offset estimated (16 parameters), a linear drift of it: the
  * on-line methods' phi_std gains d_i^2, d = phi_16 - phi_22, the
  * least-squares estimates with a constant offset and with columns t_k E6
@@ -213,20 +224,12 @@ static void test_drift_witness_equals_least_squares(void **state) {
     y_only.sigma_spec = y_only.sigma_alpha = y_only.sigma_omega = 0;
     dataset_spec_t spec = {.seed = 11, .n_samples = 1500, .n_params = 16, .noise = y_only};
     dataset_t d;
-    assert_int_equal(dataset_make(&spec, &d), 0);
-    const double drift[6] = {0.3, -0.2, 0.25, 0.02, -0.015, 0.01}; /* per second */
-    for (int k = 0; k < d.n_samples; ++k)
-        for (int r = 0; r < 6; ++r) d.y[6 * k + r] += (loadid_real_t)(drift[r] * k * 1e-3);
+    make_drifting(&spec, &d);
     loadid_est_config_t cfg;
     dataset_config(&spec, LOADID_METHOD_LS_BATCH, &cfg);
     for (int i = 0; i < 3; ++i) cfg.row_sigma[i] = 0.1f, cfg.row_sigma[3 + i] = 0.005f;
-    loadid_est_t *est;
-    assert_int_equal(loadid_est_create(&cfg, &est), 0);
-    assert_int_equal(dataset_feed(&d, est, 0, d.n_samples), 0);
     loadid_real_t phi[16], std[16], scale;
-    assert_int_equal(loadid_est_estimate(est, phi, NULL), 0);
-    assert_int_equal(loadid_est_uncertainty(est, phi, std, &scale), 0);
-    loadid_est_destroy(est);
+    fit(&d, &cfg, phi, std, &scale);
     /* Reference: H22 = sum a a^T w over rows a = [A_k row, t_k e_r], and
      * the force and torque rows' Gram matrices for the sandwich. */
     enum { N = 16, N2 = 22 };
@@ -262,7 +265,7 @@ static void test_drift_witness_equals_least_squares(void **state) {
         for (int j = 0; j < N2; ++j) x22[i] += inv22[i * N2 + j] * b[j];
     const double half = (6.0 * d.n_samples - N) / 2, s2[2] = {rss[0] / half, rss[1] / half};
     double worst = 0, share_max = 0, drift_worst = 0;
-    for (int j = 0; j < 6; ++j) drift_worst = fmax(drift_worst, fabs(x22[N + j] - drift[j]));
+    for (int j = 0; j < 6; ++j) drift_worst = fmax(drift_worst, fabs(x22[N + j] - kDrift[j]));
     for (int i = 0; i < 10; ++i) {
         double var = 0;
         for (int a = 0; a < N; ++a)
@@ -294,19 +297,11 @@ static void test_riv_drift_witness_is_its_own_pull(void **state) {
     (void)state;
     dataset_spec_t spec = {.seed = 12, .n_samples = 1500, .n_params = 16, .noise = kPaperNoise};
     dataset_t d;
-    assert_int_equal(dataset_make(&spec, &d), 0);
-    const double drift[6] = {0.3, -0.2, 0.25, 0.02, -0.015, 0.01}; /* per second */
-    for (int k = 0; k < d.n_samples; ++k)
-        for (int r = 0; r < 6; ++r) d.y[6 * k + r] += (loadid_real_t)(drift[r] * k * 1e-3);
+    make_drifting(&spec, &d);
     loadid_est_config_t cfg;
     dataset_config(&spec, LOADID_METHOD_RIV, &cfg);
-    loadid_est_t *est;
-    assert_int_equal(loadid_est_create(&cfg, &est), 0);
-    assert_int_equal(dataset_feed(&d, est, 0, d.n_samples), 0);
     loadid_real_t phi[16], std[16], scale;
-    assert_int_equal(loadid_est_estimate(est, phi, NULL), 0);
-    assert_int_equal(loadid_est_uncertainty(est, phi, std, &scale), 0);
-    loadid_est_destroy(est);
+    fit(&d, &cfg, phi, std, &scale);
     enum { N = 16, N2 = 22 };
     /* M22 = sum c a^T w over rows (c, a: [C row, t e_r], [A row, t e_r]);
      * the LS normal equations beside it; C^T W C. */
