@@ -807,11 +807,14 @@ def sim_key(noise_cell):
     return (tuple(sorted(c["sim"].items())), c["vib"], c.get("backlash"))
 
 
-def est_config(robot, noise_cell, methods, signals=None, lag=None, jerk_psd=None) -> str:
+def est_config(robot, noise_cell, methods, signals=None, lag=None, jerk_psd=None,
+               offset_model=None) -> str:
     c = NOISE_CELLS[noise_cell]
     text = robot_yaml(robot) + f"estimation:\n  methods: [{', '.join(methods)}]\n"
     if signals:
         text += f"  signals: {signals}\n"
+    if offset_model:
+        text += f"  offset_model: {offset_model}\n"
     if lag is not None or jerk_psd is not None:
         text += "kalman:\n"
     if lag is not None:
@@ -1486,6 +1489,9 @@ def main(argv=None) -> int:
     ap.add_argument("--jerk-psd", type=float, default=None,
                     help="kalman.jerk_psd, the on-line joint filter's white-jerk spectral density "
                          "(default: the configuration's)")
+    ap.add_argument("--offset-model", choices=("zeroing", "estimate"), default=None,
+                    help="estimation.offset_model for the estimators (default: the "
+                         "configuration's)")
     ap.add_argument("--trajectory-per-seed", action="store_true",
                     help="design a trajectory per seed (loadid-traj --seed N) instead of one per "
                          "robot: the coverage of phi_std then covers the trajectory's own "
@@ -1513,7 +1519,8 @@ def main(argv=None) -> int:
     if a.paper:
         given = [o for o, v in (("--robots", a.robots), ("--loads", a.loads), ("--noise", a.noise),
                                 ("--methods", a.methods), ("--signals", a.signals),
-                                ("--lag", a.lag), ("--jerk-psd", a.jerk_psd), ("--quick", a.quick))
+                                ("--lag", a.lag), ("--jerk-psd", a.jerk_psd),
+                                ("--offset-model", a.offset_model), ("--quick", a.quick))
                  if v]
         if given:
             raise SystemExit(f"loadid-study: --paper runs the paper's own grid; {', '.join(given)} "
@@ -1570,7 +1577,8 @@ def main(argv=None) -> int:
         est_cfgs = {}
         for noise in noises:
             p = work / "configs" / f"est-{robot}-{noise}.yaml"
-            p.write_text(est_config(robot, noise, methods, a.signals, a.lag, a.jerk_psd))
+            p.write_text(est_config(robot, noise, methods, a.signals, a.lag, a.jerk_psd,
+                                    a.offset_model))
             est_cfgs[noise] = p
         for load in loads:
             groups = {}
