@@ -76,9 +76,10 @@ Md attenuation_share(const CovInput &in, const Vd &t, const Vd &phi, const Md &h
     return b * b.transpose();
 }
 
-// d d^T, d = phi_16 - phi_22: the least-squares estimates with a constant
-// offset and with a linearly drifting one (uncertainty.hpp), from the
-// weighted sums (gs: the (n+1) x (n+1) Gram with column weights t).
+// d d^T, d = phi_16 - phi_22: the least-squares estimates (IV's for IV)
+// with a constant offset and with a linearly drifting one
+// (uncertainty.hpp), from the weighted sums (gs: the (n+1) x (n+1) Gram
+// with column weights t).
 Md drift_share(const CovInput &in, const Md &gs, const Vd &t) {
     const int n = in.n;
     if (!in.drift_cross || !in.drift_y || !in.row_weight || n != LOADID_NPHI_OFFSET)
@@ -88,18 +89,6 @@ Md drift_share(const CovInput &in, const Md &gs, const Vd &t) {
                              kMaxDrift>;
     using Vw = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxDrift, 1>;
     const int n2 = n + LOADID_NROWS;
-    // In the weighted coordinates x = T^-1 phi; the drift columns t_k E6
-    // weighted by the rows' D.
-    Mw h = Mw::Zero(n2, n2);
-    Vw rhs(n2);
-    h.topLeftCorner(n, n) = gs.topLeftCorner(n, n);
-    rhs.head(n) = gs.col(n).head(n);
-    for (int r = 0; r < LOADID_NROWS; ++r) {
-        const double d = static_cast<double>(in.row_weight[r]);
-        for (int j = 0; j < n; ++j) h(j, n + r) = h(n + r, j) = d * in.drift_cross[j * 6 + r];
-        h(n + r, n + r) = d * d * in.drift_tt;
-        rhs(n + r) = d * in.drift_y[r];
-    }
     if (in.kind == CovKind::IV && in.iv_drift && in.iv_m && in.iv_b) {
         // IV, unweighted: [C t E6]^T W [A t E6] [phi; rate] = [C t E6]^T W y,
         // the rows' W = D^2; sum t W A and sum t W y from the drift sums.
@@ -125,6 +114,18 @@ Md drift_share(const CovInput &in, const Md &gs, const Vd &t) {
         if (!iv16.allFinite() || !iv22.allFinite()) return Md::Zero(n, n);
         const Vd dphi = iv16 - iv22.head(n);
         return dphi * dphi.transpose();
+    }
+    // Least squares, in the weighted coordinates x = T^-1 phi; the drift
+    // columns t_k E6 weighted by the rows' D.
+    Mw h = Mw::Zero(n2, n2);
+    Vw rhs(n2);
+    h.topLeftCorner(n, n) = gs.topLeftCorner(n, n);
+    rhs.head(n) = gs.col(n).head(n);
+    for (int r = 0; r < LOADID_NROWS; ++r) {
+        const double d = static_cast<double>(in.row_weight[r]);
+        for (int j = 0; j < n; ++j) h(j, n + r) = h(n + r, j) = d * in.drift_cross[j * 6 + r];
+        h(n + r, n + r) = d * d * in.drift_tt;
+        rhs(n + r) = d * in.drift_y[r];
     }
     Eigen::LDLT<Mw> full(h);
     Eigen::LDLT<Md> part(Md(h.topLeftCorner(n, n)));

@@ -507,9 +507,8 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     /* The smoother's bandwidth from the data: of ten times the configured
      * jerk PSD, it and three lower ones (each a factor 10, the bandwidth
      * 1.47 times lower), the one whose kinematics explain the measured
-     * wrench best. A
-     * smoother too wide keeps what the encoders see but the load does not
-     * (backlash, noise); one too narrow blunts the motion. */
+     * wrench best. A smoother too wide keeps what the encoders see but the
+     * load does not (backlash, noise); one too narrow blunts the motion. */
     loadid_jf_config_t jf = r->jf;
     double best = INFINITY, best_psd = (double)r->jf.jerk_psd;
     int64_t used = 0;
