@@ -112,7 +112,7 @@ int64_t loadid_jf_last_time(const loadid_jf_t *jf);
  * steady state's is its mean the motion's; before, the fixed-lag
  * smoother's steady-state gains amplify its large innovations (after a
  * 0.3 s stall that cost RTLS 55 % of the mass). settle is the number of
- * updates at nominal_step_us from the prior until then: 10 at jerk_psd 10
+ * updates at nominal_step_us from the prior until then: 15 at jerk_psd 1
  * and 1 kHz (the daemon's defaults). Returns it, or -EINVAL. */
 int loadid_jf_settle_steps(const loadid_jf_t *jf);
 
