@@ -86,8 +86,8 @@ class RecursiveLs final : public loadid_est {
             return cov_input<N>(CovKind::LS, excitation_, excitation_.col_weight().data(), samples_,
                                 phi, cfg);
         return cov_input<N>(CovKind::IV, excitation_, excitation_.col_weight().data(), samples_,
-                            phi, cfg, M_.data(), CC_.data(),
-                            N == LOADID_NPHI_OFFSET ? iv_drift_.data() : nullptr, b_.data());
+                            phi, cfg, M_.data(), CC_.data(), kDrift ? iv_drift_.data() : nullptr,
+                            b_.data());
     }
 
   private:
@@ -133,7 +133,7 @@ class RecursiveLs final : public loadid_est {
         M_.noalias() += CtLi.lazyProduct(B);
         CC_.noalias() += CtLi.lazyProduct(C); // C^T W C: the instruments' part of RIV's covariance
         b_.noalias() += CtLi * y;
-        if (N == LOADID_NPHI_OFFSET) // the drift witness's IV sums, on the excitation's clock
+        if constexpr (kDrift) // the drift witness's IV sums, on the excitation's clock
             iv_drift_ += (double(samples_) * 1e-3) * CtLi.template cast<double>();
     }
 
@@ -143,7 +143,9 @@ class RecursiveLs final : public loadid_est {
     Eigen::Matrix<Real, N, N> M_;
     Eigen::Matrix<Real, N, N> CC_;
     Vec<N> b_;
-    Eigen::Matrix<double, N, 6> iv_drift_; // sum_k t_k C_k^T W (uncertainty.hpp)
+    // sum_k t_k C_k^T W (uncertainty.hpp), with the offset estimated only
+    static constexpr bool kDrift = N == LOADID_NPHI_OFFSET;
+    Eigen::Matrix<double, kDrift ? N : 1, 6> iv_drift_;
     Eigen::Matrix<Real, N, N> U_;
     Vec<N> D_;
     Excitation<N> excitation_;
