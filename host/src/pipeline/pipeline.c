@@ -78,6 +78,9 @@ struct loadid_pipeline {
     int started;
     /* zeroing */
     int64_t zero_end_us;
+    /* zeroing samples; those with kinematics (zero_a's). From
+     * finish_zeroing on, zero_n counts the samples y0 averages: all, or
+     * zero_g_n when the load moved. */
     int64_t zero_n, zero_g_n;
     double zero_sum[6], zero_g_sum[3], zero_a_sum[60];
     double zero_g2_sum, zero_w2_sum; /* sum |g|^2, |omega|^2: did it move? */

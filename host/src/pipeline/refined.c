@@ -293,10 +293,8 @@ static double normal_equations(const loadid_refined_t *r, int n_params, int cols
 
 /* The columns of the fits below: n_params, and with t_ref not INT64_MIN
  * six more, (t - t_ref) E6, the offset's drift (fit_drift): a drift the
- * fits left out steered the bandwidth and the delay (on slow motion with
- * 0.05 N/s of drift REFINED used a joint delay of 16.5 ms at 6 standard
- * errors, now none; on another draw 23 ms and its mass 4.7 % off, now
- * 10 ms and 1 %). */
+ * fits leave out steers the bandwidth and the delay (on slow motion 0.05
+ * N/s of it passed for a 16.5 ms joint delay at 6 standard errors). */
 static int fit_cols(int n_params, int64_t t_ref) {
     return t_ref == INT64_MIN ? n_params : n_params + 6;
 }
