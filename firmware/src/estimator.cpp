@@ -278,6 +278,20 @@ extern "C" int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real
     return rc;
 }
 
+extern "C" int loadid_est_drift_fitted(const loadid_est_t *est, const loadid_real_t *phi,
+                                       loadid_real_t *phi_fitted, loadid_real_t *std,
+                                       loadid_real_t *scale) {
+    if (!est || !phi || !phi_fitted || !std) return -EINVAL;
+    loadid::CovInput in = est->information(phi);
+    if (in.n != LOADID_NPHI_OFFSET || !in.drift_cross) return -ENOTSUP;
+    if (!all_finite(phi, in.n)) return LOADID_E_NONFINITE;
+    in.phi_fitted = phi_fitted;
+    loadid_real_t s;
+    const int rc = covariance_std(in, std, &s);
+    if (scale) *scale = s;
+    return rc;
+}
+
 extern "C" int loadid_est_signal_to_noise(const loadid_est_t *est, const loadid_real_t *phi,
                                           loadid_real_t snr[3]) {
     if (!est || !phi || !snr) return -EINVAL;

@@ -14,7 +14,8 @@
 namespace loadid {
 namespace {
 
-constexpr int kMax = LOADID_MAX_PARAMS + 1;
+// The parameters, the drift's six columns when it is fitted, and y.
+constexpr int kMax = LOADID_MAX_PARAMS + LOADID_NROWS + 1;
 using Md = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kMax, kMax>;
 using Vd = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kMax, 1>;
 
@@ -61,7 +62,7 @@ Md offset_share(const CovInput &in, const Vd &t, const Md &inv) {
 // pull the estimate by (uncertainty.hpp). h: sum A^T W A (n x n, without
 // the column weights).
 Md attenuation_share(const CovInput &in, const Vd &t, const Vd &phi, const Md &h) {
-    const int n = in.n;
+    const int n = static_cast<int>(h.rows());
     Vd c = Vd::Zero(n);
     if (!in.col_exact) return Md::Zero(n, n);
     for (int j = 0; j < std::min(n, LOADID_NPHI); ++j) { // the offset columns are exact
@@ -137,24 +138,138 @@ Md drift_share(const CovInput &in, const Md &gs, const Vd &t) {
     return dphi * dphi.transpose();
 }
 
-} // namespace
+// What covariance_std works on: the weighted Gram of [A y] with column
+// weights t (gs, and gts over the torque rows), np columns estimated at
+// phi (np values), IV's M and C^T W C (unweighted). The columns from
+// exact_from on are exact (the drift's): TLS takes no noise off them.
+struct Problem {
+    int np = 0, exact_from = 0;
+    Md gs, gts, m, cc;
+    Vd t, phi;
+    bool witness = true; // add the zeroing offset's share and the drift witness
+    Md out;              // in.n x np: what is reported of phi (empty: its first in.n)
+};
 
-int covariance_std(const CovInput &in, Real *std, Real *scale) {
+// The estimate's problem as the estimator keeps it.
+Problem plain(const CovInput &in) {
+    Problem p;
     const int n = in.n, n1 = n + 1;
-    for (int i = 0; i < n; ++i) std[i] = std::numeric_limits<Real>::infinity();
+    p.np = p.exact_from = n;
+    p.gs = symmetric(in.gram, n1);
+    p.gts = symmetric(in.gram_torque, n1);
+    p.t.resize(n1);
+    for (int j = 0; j < n1; ++j) p.t(j) = static_cast<double>(in.t[j]);
+    p.phi.resize(n);
+    for (int j = 0; j < n; ++j) p.phi(j) = static_cast<double>(in.phi[j]);
+    if (in.kind == CovKind::IV) {
+        p.m.resize(n, n);
+        p.cc.resize(n, n);
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                p.m(i, j) = static_cast<double>(in.iv_m[j * n + i]);
+                p.cc(i, j) = static_cast<double>(in.iv_cc[j * n + i]);
+            }
+    }
+    return p;
+}
+
+// The problem with the offset's linear drift fitted too (uncertainty.hpp):
+// six exact columns tau_k E6 after the n parameters (column weight 1), at
+// phi less the drift's pull and the drift's fitted rate. pull: n values.
+// False without the drift sums or when a fit is singular.
+bool with_drift(const CovInput &in, Problem &p, Vd &pull) {
+    const int n = in.n, nd = LOADID_NROWS, n2 = n + nd;
+    if (!in.drift_cross || !in.drift_y || !in.row_weight || n != LOADID_NPHI_OFFSET) return false;
+    const Problem q = plain(in);
+    p = q;
+    p.np = n2;
+    p.witness = false;
+    p.gs = Md::Zero(n2 + 1, n2 + 1);
+    p.gts = Md::Zero(n2 + 1, n2 + 1);
+    // Parameters 0..n-1, drift n..n2-1, y at n2.
+    auto place = [&](const Md &from, Md &to) {
+        to.topLeftCorner(n, n) = from.topLeftCorner(n, n);
+        to.block(n2, 0, 1, n) = from.block(n, 0, 1, n);
+        to.block(0, n2, n, 1) = from.block(0, n, n, 1);
+        to(n2, n2) = from(n, n);
+    };
+    place(q.gs, p.gs);
+    place(q.gts, p.gts);
+    for (int r = 0; r < nd; ++r) {
+        const double d = static_cast<double>(in.row_weight[r]);
+        for (Md *g : {&p.gs, &p.gts}) {
+            if (g == &p.gts && r < 3) continue; // a drift column reaches its own row only
+            for (int j = 0; j < n; ++j)
+                (*g)(n + r, j) = (*g)(j, n + r) = d * in.drift_cross[j * 6 + r];
+            (*g)(n + r, n2) = (*g)(n2, n + r) = d * in.drift_y[r];
+            (*g)(n + r, n + r) = d * d * in.drift_tt;
+        }
+    }
+    p.t.resize(n2 + 1);
+    p.t.head(n) = q.t.head(n);
+    p.t.segment(n, nd).setOnes();
+    p.t(n2) = q.t(n);
+    Vd x16, x22;
+    if (in.kind == CovKind::IV && in.iv_drift && in.iv_b) {
+        // [C t E6]^T W [A t E6] [phi; rate] = [C t E6]^T W y, W = D^2; the
+        // drift columns are their own instruments.
+        p.m = Md::Zero(n2, n2);
+        p.cc = Md::Zero(n2, n2);
+        p.m.topLeftCorner(n, n) = q.m;
+        p.cc.topLeftCorner(n, n) = q.cc;
+        Vd b(n2);
+        for (int j = 0; j < n; ++j) b(j) = static_cast<double>(in.iv_b[j]);
+        for (int r = 0; r < nd; ++r) {
+            const double d = static_cast<double>(in.row_weight[r]);
+            for (int j = 0; j < n; ++j) {
+                p.m(j, n + r) = p.cc(j, n + r) = p.cc(n + r, j) = in.iv_drift[r * n + j];
+                p.m(n + r, j) = d * in.drift_cross[j * 6 + r] / q.t(j);
+            }
+            p.m(n + r, n + r) = p.cc(n + r, n + r) = d * d * in.drift_tt;
+            b(n + r) = d * in.drift_y[r] / q.t(n);
+        }
+        x16 = Eigen::PartialPivLU<Md>(q.m).solve(Vd(b.head(n)));
+        x22 = Eigen::PartialPivLU<Md>(p.m).solve(b);
+    } else {
+        if (in.kind == CovKind::IV) return false;
+        // Least squares in the unweighted columns.
+        const Md g = p.t.cwiseInverse().asDiagonal() * p.gs * p.t.cwiseInverse().asDiagonal();
+        Eigen::LDLT<Md> full(Md(g.topLeftCorner(n2, n2)));
+        Eigen::LDLT<Md> part(Md(g.topLeftCorner(n, n)));
+        if (full.info() != Eigen::Success || part.info() != Eigen::Success) return false;
+        x22 = full.solve(Vd(g.col(n2).head(n2)));
+        x16 = part.solve(Vd(g.col(n2).head(n)));
+    }
+    if (!x16.allFinite() || !x22.allFinite()) return false;
+    pull = x16 - x22.head(n);
+    p.phi.resize(n2);
+    p.phi.head(n) = q.phi - pull;
+    p.phi.tail(nd) = x22.tail(nd);
+    // The offset reported is the line's at the window's (weighted) mean
+    // time, where a constant offset's fit would put it and its error is
+    // least: offset + tau_mid rate. tau_mid = sum w tau / sum w from the
+    // first offset column (its entry is 1 in its row).
+    const int off = LOADID_NPHI;
+    const double w_sum = q.gs(off, off),
+                 tau_mid = in.drift_cross[off * 6] * in.row_weight[0] * q.t(off) / w_sum;
+    if (!(w_sum > 0) || !std::isfinite(tau_mid)) return false;
+    p.out = Md::Identity(n, n2);
+    for (int r = 0; r < nd; ++r) p.out(off + r, n + r) = tau_mid;
+    return true;
+}
+
+int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) {
+    const int n = p.np, n1 = n + 1;
+    for (int i = 0; i < in.n; ++i) std[i] = std::numeric_limits<Real>::infinity();
     *scale = std::numeric_limits<Real>::quiet_NaN();
     const double rows = 6.0 * static_cast<double>(in.samples), dof = rows - n;
     if (!(dof >= 2)) return LOADID_E_NOT_EXCITED;
-    Vd t(n1);
-    for (int j = 0; j < n1; ++j) t(j) = static_cast<double>(in.t[j]);
-    Vd phi(n);
-    for (int j = 0; j < n; ++j) phi(j) = static_cast<double>(in.phi[j]);
+    const Vd &t = p.t, &phi = p.phi;
     // Without the column weights: sum [A y]^T D^2 [A y], all rows and the
     // torque rows.
-    const Md gs = symmetric(in.gram, n1);
+    const Md &gs = p.gs;
     const Md g = t.cwiseInverse().asDiagonal() * gs * t.cwiseInverse().asDiagonal();
-    const Md gt = t.cwiseInverse().asDiagonal() * symmetric(in.gram_torque, n1) *
-                  t.cwiseInverse().asDiagonal();
+    const Md gt = t.cwiseInverse().asDiagonal() * p.gts * t.cwiseInverse().asDiagonal();
     const Md gf = g - gt;
     // The residual's variance per row group, and overall.
     Vd v(n1);
@@ -176,25 +291,35 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
     const double s2_iv = (sf2 + st2) / 2;
     Md cov(n, n);
     if (in.kind == CovKind::IV) {
-        Md m(n, n), cc(n, n);
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i) {
-                m(i, j) = static_cast<double>(in.iv_m[j * n + i]);
-                cc(i, j) = static_cast<double>(in.iv_cc[j * n + i]);
-            }
-        Eigen::PartialPivLU<Md> lu(m);
+        Eigen::PartialPivLU<Md> lu(p.m);
         const Md mi = lu.inverse();
         if (!mi.allFinite()) return LOADID_E_NOT_EXCITED;
-        cov = s2_iv * mi * cc * mi.transpose() + offset_share(in, t, mi) + drift_share(in, gs, t);
+        if (p.witness)
+            cov = s2_iv * mi * p.cc * mi.transpose() + offset_share(in, t, mi) +
+                  drift_share(in, gs, t);
+        else
+            cov = s2_iv * mi * p.cc * mi.transpose();
     } else {
         Md h = g.topLeftCorner(n, n);
         if (in.kind == CovKind::TLS) {
             // A0^T W A0 of the noise-free data: the noise's share, the
             // smallest eigenvalue of the scaled Gram per unit column weight,
-            // comes off (Van Huffel & Vandewalle 1991, sec. 8.2).
-            Eigen::SelfAdjointEigenSolver<Md> es(gs, Eigen::EigenvaluesOnly);
+            // comes off (Van Huffel & Vandewalle 1991, sec. 8.2); exact
+            // columns are eliminated first (mixed LS-TLS) and keep theirs.
+            const int ne = n - p.exact_from;
+            Md noisy = gs;
+            if (ne > 0) {
+                const int k = p.exact_from;
+                Md s(n1 - ne, n1 - ne);
+                s << gs.topLeftCorner(k, k), gs.block(0, n, k, 1), gs.block(n, 0, 1, k), gs(n, n);
+                Md x(ne, n1 - ne);
+                x << gs.block(k, 0, ne, k), gs.block(k, n, ne, 1);
+                noisy = s - x.transpose() * Md(gs.block(k, k, ne, ne)).ldlt().solve(x);
+            }
+            Eigen::SelfAdjointEigenSolver<Md> es(noisy, Eigen::EigenvaluesOnly);
             const double lmin = std::max(es.eigenvalues()(0), 0.0);
-            h.diagonal().array() -= lmin * t.head(n).array().square().inverse();
+            h.diagonal().head(p.exact_from).array() -=
+                lmin * t.head(p.exact_from).array().square().inverse();
             // TLS's own scale: the orthogonal residual per entry of the
             // weighted data, 1 when the row and column weights fit.
             s2 = lmin / dof;
@@ -202,13 +327,31 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
         Md hi;
         if (!spd_inverse(h, hi)) return LOADID_E_NOT_EXCITED;
         const Md meat = sf2 * gf.topLeftCorner(n, n) + st2 * gt.topLeftCorner(n, n);
-        cov = hi * meat * hi + offset_share(in, t, hi) +
-              attenuation_share(in, t, phi, g.topLeftCorner(n, n)) + drift_share(in, gs, t);
+        if (p.witness)
+            cov = hi * meat * hi + offset_share(in, t, hi) +
+                  attenuation_share(in, t, phi, g.topLeftCorner(n, n)) + drift_share(in, gs, t);
+        else
+            cov = hi * meat * hi + attenuation_share(in, t, phi, g.topLeftCorner(n, n));
     }
     if (!cov.allFinite()) return LOADID_E_NOT_EXCITED;
-    for (int i = 0; i < n; ++i) std[i] = static_cast<Real>(std::sqrt(std::max(cov(i, i), 0.0)));
+    if (p.out.size() != 0) cov = p.out * cov * p.out.transpose();
+    for (int i = 0; i < in.n; ++i) std[i] = static_cast<Real>(std::sqrt(std::max(cov(i, i), 0.0)));
     *scale = static_cast<Real>(std::sqrt(s2));
     return 0;
+}
+
+} // namespace
+
+int covariance_std(const CovInput &in, Real *std, Real *scale) {
+    if (!in.phi_fitted) return covariance_of(in, plain(in), std, scale);
+    Problem p;
+    Vd pull;
+    for (int i = 0; i < in.n; ++i) std[i] = std::numeric_limits<Real>::infinity();
+    *scale = std::numeric_limits<Real>::quiet_NaN();
+    if (!with_drift(in, p, pull)) return LOADID_E_NOT_EXCITED;
+    const Vd reported = p.out * p.phi;
+    for (int i = 0; i < in.n; ++i) in.phi_fitted[i] = static_cast<Real>(reported(i));
+    return covariance_of(in, p, std, scale);
 }
 
 int weakest_direction(const CovInput &in, Real *dir, Real *ratio) {

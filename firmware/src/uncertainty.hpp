@@ -48,6 +48,10 @@
 // takes its own: the IV estimates without and with the drift columns,
 // which are their own instruments (the least-squares d left RIV's COM
 // 32 mm off at 8 mm phi_std on a slow 7-joint recording).
+// A final estimate takes the drift out instead (phi_fitted below): phi - d
+// is the estimate of the model with the drift's columns, and its
+// covariance that model's, without d d^T; without a drift it costs
+// what fitting the six columns costs.
 #pragma once
 
 #include <cstdint>
@@ -96,6 +100,12 @@ struct CovInput {
     // column-major) and sum_k C_k^T W y_k (n); nullptr: the least-squares d.
     const double *iv_drift = nullptr;
     const Real *iv_b = nullptr;
+    // Non-null (with the drift sums): the drift fitted rather than
+    // witnessed. phi_fitted (n values) gets phi less d, and std is that
+    // estimate's: the covariance of the model with the six drift columns
+    // (exact, for TLS eliminated before the noise's share comes off), at
+    // its own residual.
+    Real *phi_fitted = nullptr;
 };
 
 // Fills std (n values) and *scale (s). Returns 0, or LOADID_E_NOT_EXCITED

@@ -198,14 +198,15 @@ def test_slow_motion_claims_only_what_it_got_right(tmp_path, robot, seed):
     RTLS and RLS said the mass identified at 28 % off (now 1 % off); a
     constant offset took the offset's drift into the COM (RIV 26 mm,
     REFINED 22 mm, both claimed at 5 mm std; REFINED now fits the drift,
-    4 mm, and the on-line methods' phi_std counts its pull). UR5, seed 3:
+    4 mm, and the on-line methods' final estimates fit it too). UR5, seed 3:
     a - g varies 0.04 m/s^2 over the window, as much as the joint filter's
     own noise in it, so least squares on it lost 26 % of the mass, said
     identified at a phi_std of 3.4 %; phi_std now counts what that noise
     may pull (33 %). With the joint filter's default bandwidth lowered
     (kalman.jerk_psd 1, less noise in a - g) RTLS and RLS refuse there,
     the mass not standing out either, and RIV, which had claimed its mass
-    5.8 % off, takes its own pull of the drift into phi_std."""
+    5.8 % off, fits the drift with its own instruments (seen 2.3 % off at
+    4.7 % phi_std)."""
     section = "" if robot == "rx60" else f"robot:\n  urdf: {UR5}\n"
     rec, result = real_data_like(tmp_path, section, seed)
     phi, _ = truth_phi(rec)
@@ -218,8 +219,9 @@ def test_slow_motion_claims_only_what_it_got_right(tmp_path, robot, seed):
             assert np.linalg.norm(np.array(est["model"]["com"]) - c_t) < 0.015, (est["method"],
                                                                                 est["model"])
     for est in (result[0], result[2]):  # RTLS, RLS
-        if robot == "rx60":  # seen: 0.9 % off
-            assert abs(est["mass"] - m_t) / m_t < 0.03, est["mass"]
+        if robot == "rx60":  # seen: 4.7 % off at 2.0 phi_std, the drift fitted (REFINED 4.3 %)
+            assert abs(est["mass"] - m_t) / m_t < 0.05, est["mass"]
+            assert abs(est["mass"] - m_t) <= 3 * est["phi_std"][0], (est["mass"], est["phi_std"])
         elif "error" in est:  # seen (jerk_psd 1): refused, the mass not standing out
             assert "nor does the mass" in est["error"], est["error"]
         else:  # seen (jerk_psd 10): 26 % off, phi_std 33 %
@@ -485,11 +487,12 @@ def test_offset_model_estimates_the_offset(trajectory, tmp_path):
     np.testing.assert_allclose(rtls["offset"][3:], offset[3:], atol=0.03)
 
 
-def test_refined_fits_the_offset_drift(trajectory, tmp_path):
+def test_the_offset_drift_is_fitted_with_the_offset_estimated(trajectory, tmp_path):
     """With the offset estimated (no zeroing), REFINED fits a linear drift
     of it as well (the simulator's drift, from the recording's start, is
     linear): the drift within 10 % (seen 2-4 %), and the load within the
-    default bounds, which RLS, fitting a constant offset, misses."""
+    default bounds; so does RLS's final estimate, which fits it too
+    (loadid_est_drift_fitted; with a constant offset it missed them)."""
     drift = [0.3, -0.2, 0.25, 0.02, -0.015, 0.01]
     sim = write_config(tmp_path / "sim.yaml", "simulation:\n  drift: "
                        + json.dumps(drift) + "\n")
@@ -503,8 +506,7 @@ def test_refined_fits_the_offset_drift(trajectory, tmp_path):
     np.testing.assert_allclose(fitted, drift, rtol=0.1)
     assert "REFINED: the offset drifts" in err
     assert_close_to_truth(refined, phi, "offset")
-    with pytest.raises(AssertionError):
-        assert_close_to_truth(rls, phi, "offset")
+    assert_close_to_truth(rls, phi, "offset")
 
 
 def samples_in_window(rec):

@@ -268,6 +268,22 @@ int loadid_est_estimate_unique(const loadid_est_t *est, loadid_real_t *phi,
 int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real_t *phi, loadid_real_t *std,
                            loadid_real_t *scale);
 
+/* With the offset estimated (16 parameters), the estimate had the offset's
+ * linear drift over the window been fitted too: phi_fitted = phi - d, d
+ * the drift's pull (this method's own: RIV's instrumental, least squares'
+ * for the others; the witness loadid_est_uncertainty adds as d d^T), and
+ * std that estimate's standard deviations, the covariance of the model
+ * with six more (exact) columns t E6 at its own residual; the offset
+ * (phi_fitted[10..15]) is the fitted line's at the window's mean time. For
+ * a final estimate: the drift is taken out rather than only widening the
+ * band.
+ * phi, phi_fitted, std: 16 values; scale as loadid_est_uncertainty's.
+ * Returns 0; -EINVAL; -ENOTSUP (10 parameters, or REFINED, which fits the
+ * drift itself); LOADID_E_NONFINITE; LOADID_E_NOT_EXCITED (a fit is
+ * singular; std +Inf). No allocation, no system call. */
+int loadid_est_drift_fitted(const loadid_est_t *est, const loadid_real_t *phi,
+                            loadid_real_t *phi_fitted, loadid_real_t *std, loadid_real_t *scale);
+
 /* How far each group of phi stands out of the noise in this estimator's
  * data: snr[0] (mass), snr[1] (m c), snr[2] (inertia) are the RMS over the
  * rows of the wrench that group of phi explains, sqrt(phi_g^T (A_g^T W A_g)

@@ -311,22 +311,10 @@ static void explain(loadid_pipeline_t *p, int m, int rc, const loadid_est_info_t
                  (double)info->noise_ratio, (double)info->condition_number, (long long)k);
 }
 
-/* The final estimate's uncertainty and load model (load_model_t). */
-static void model_of(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
+/* The final estimate's load model (load_model_t), from its phi_std (std,
+ * 10 values) and residual scale. */
+static void model_of(loadid_pipeline_t *p, int m, const loadid_real_t *std, loadid_real_t scale,
                      const loadid_real_t load[10], loadid_pipeline_estimate_t *e) {
-    loadid_real_t std[16], scale = 0;
-    if (loadid_est_uncertainty(p->est[m], phi, std, &scale) != 0)
-        for (int i = 0; i < 16; ++i) std[i] = (loadid_real_t)INFINITY;
-    /* REFINED's offset drift: what estimating it costs (refined.h). */
-    if (m == p->refined_m && p->refined_rep.drift_fitted)
-        for (int i = 0; i < 10; ++i)
-            std[i] =
-                (loadid_real_t)sqrt((double)std[i] * (double)std[i] + p->refined_rep.drift_var[i]);
-    /* The zeroed model's drift (check_drift): what fitting it costs. */
-    if (m != p->refined_m && p->drift_significant)
-        for (int i = 0; i < 10; ++i)
-            std[i] =
-                (loadid_real_t)sqrt((double)std[i] * (double)std[i] + p->drift_result.extra_var[i]);
     /* How far the load's groups stand out of the noise in the data. */
     loadid_real_t load_n[16] = {0}, snr[3];
     for (int i = 0; i < 10; ++i) load_n[i] = load[i];
@@ -345,10 +333,12 @@ static void model_of(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
     for (int i = 0; i < 6; ++i) e->model_inertia_com[i] = (double)lm.physical.inertia_com[i];
 }
 
-/* e's load fields from method m's phi (load and offset); final: with its
- * uncertainty and load model, else phi_std with std_always. */
+/* e's load fields from method m's phi (load and offset); final (std, its
+ * phi_std, and scale from final_phi): with its load model, else phi_std
+ * with std_always. */
 static void fill_estimate(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
-                          loadid_pipeline_estimate_t *e, int final) {
+                          loadid_pipeline_estimate_t *e, const loadid_real_t *final_std,
+                          loadid_real_t scale) {
     loadid_real_t load[10];
     loadid_phi_subtract(phi, p->distal, load);
     loadid_physical_t ph;
@@ -360,8 +350,8 @@ static void fill_estimate(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
     for (int i = 0; i < 3; ++i) e->com[i] = (double)ph.com[i];
     for (int i = 0; i < 6; ++i) e->inertia_com[i] = (double)ph.inertia_com[i];
     e->physically_consistent = ph.violations == 0;
-    if (final) {
-        model_of(p, m, phi, load, e);
+    if (final_std) {
+        model_of(p, m, final_std, scale, load, e);
     } else if (p->std_always) {
         loadid_real_t std[16];
         const int ok = loadid_est_uncertainty(p->est[m], phi, std, NULL) == 0;
@@ -369,13 +359,36 @@ static void fill_estimate(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
     }
 }
 
-/* Method m's final phi as if the zeroed model's drift (check_drift) had
- * been taken out of the wrench; REFINED takes it out itself. */
-static void without_drift(const loadid_pipeline_t *p, int m, loadid_real_t *phi) {
-    if (!p->drift_significant || m == p->refined_m) return;
-    const double *pull = p->drift_result.pull;
-    if (p->cfg.methods[m] == LOADID_METHOD_RIV) pull = p->drift_iv_pull;
-    for (int i = 0; i < 10; ++i) phi[i] -= (loadid_real_t)pull[i];
+/* Method m's final phi and its std (16 values) and residual scale, the
+ * offset's drift taken out of the wrench: with the offset estimated always
+ * (the estimator fits it, loadid_est_drift_fitted), with zeroing when the
+ * drift check found one (phi less its pull, the variance plus what
+ * fitting it costs); REFINED fits it itself (refined.h). */
+static void final_phi(const loadid_pipeline_t *p, int m, loadid_real_t *phi, loadid_real_t *std,
+                      loadid_real_t *scale) {
+    *scale = 0;
+    if (m != p->refined_m && p->n_params == LOADID_NPHI_OFFSET) {
+        loadid_real_t fitted[16];
+        if (loadid_est_drift_fitted(p->est[m], phi, fitted, std, scale) == 0) {
+            memcpy(phi, fitted, sizeof fitted);
+            return;
+        }
+    }
+    const int zeroed_drift = m != p->refined_m && p->drift_significant;
+    if (zeroed_drift) {
+        const double *pull = p->drift_result.pull;
+        if (p->cfg.methods[m] == LOADID_METHOD_RIV) pull = p->drift_iv_pull;
+        for (int i = 0; i < 10; ++i) phi[i] -= (loadid_real_t)pull[i];
+    }
+    if (loadid_est_uncertainty(p->est[m], phi, std, scale) != 0)
+        for (int i = 0; i < 16; ++i) std[i] = (loadid_real_t)INFINITY;
+    const double *extra = zeroed_drift ? p->drift_result.extra_var
+                          : m == p->refined_m && p->refined_rep.drift_fitted
+                              ? p->refined_rep.drift_var
+                              : NULL;
+    if (extra)
+        for (int i = 0; i < 10; ++i)
+            std[i] = (loadid_real_t)sqrt((double)std[i] * (double)std[i] + extra[i]);
 }
 
 /* At DONE, a method the noise-ratio gate refused whose solution is unique
@@ -389,12 +402,13 @@ static int final_if_determined(loadid_pipeline_t *p, int m, loadid_pipeline_esti
     loadid_real_t phi[16] = {0};
     loadid_est_info_t info;
     if (loadid_est_estimate_unique(p->est[m], phi, &info) != 0) return 0;
-    without_drift(p, m, phi);
+    loadid_real_t std[16], scale;
+    final_phi(p, m, phi, std, &scale);
     loadid_pipeline_estimate_t t = *e;
     t.valid = 1;
     t.error = 0;
     t.why[0] = '\0';
-    fill_estimate(p, m, phi, &t, 1);
+    fill_estimate(p, m, phi, &t, std, scale);
     if (!t.has_model || !(t.identified & LOADID_IDENT_MASS)) return -1;
     *e = t;
     if (m != p->refined_m) /* REFINED's job runs on the worker: no log there */
@@ -433,8 +447,9 @@ static void estimate_at(loadid_pipeline_t *p, int m, loadid_pipeline_estimate_t 
         explain(p, m, rc, &info, taken == -1, e->why, sizeof e->why);
         return;
     }
-    if (final) without_drift(p, m, phi);
-    fill_estimate(p, m, phi, e, final);
+    loadid_real_t std[16], scale = 0;
+    if (final) final_phi(p, m, phi, std, &scale);
+    fill_estimate(p, m, phi, e, final ? std : NULL, scale);
 }
 
 static int data_matrix(const loadid_pipeline_t *p, const loadid_regressor_input_t *in,
