@@ -46,7 +46,8 @@ typedef struct {
     int blocks;           /* K */
     double rate[6];       /* the drift, N/s and N m/s */
     double pull[10];      /* phi without the drift columns less phi with them */
-    double extra_var[10]; /* what fitting the rates adds to phi's variance */
+    double extra_var[10]; /* what fitting the rates adds to phi's variance: the larger of
+                             the white s^2 cost and the pull's block jackknife */
     double p_value;       /* of F = (K - 6) / (6 (K - 1)) W on F(6, K - 6), W = rate^T V^-1
                              rate, V the jackknife's */
 } loadid_drift_result_t;
