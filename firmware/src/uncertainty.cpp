@@ -77,67 +77,6 @@ Md attenuation_share(const CovInput &in, const Vd &t, const Vd &phi, const Md &h
     return b * b.transpose();
 }
 
-// d d^T, d = phi_16 - phi_22: the least-squares estimates (IV's for IV)
-// with a constant offset and with a linearly drifting one
-// (uncertainty.hpp), from the weighted sums (gs: the (n+1) x (n+1) Gram
-// with column weights t).
-Md drift_share(const CovInput &in, const Md &gs, const Vd &t) {
-    const int n = in.n;
-    if (!in.drift_cross || !in.drift_y || !in.row_weight || n != LOADID_NPHI_OFFSET)
-        return Md::Zero(n, n);
-    constexpr int kMaxDrift = LOADID_NPHI_OFFSET + LOADID_NROWS;
-    using Mw = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kMaxDrift,
-                             kMaxDrift>;
-    using Vw = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxDrift, 1>;
-    const int n2 = n + LOADID_NROWS;
-    if (in.kind == CovKind::IV && in.iv_drift && in.iv_m && in.iv_b) {
-        // IV, unweighted: [C t E6]^T W [A t E6] [phi; rate] = [C t E6]^T W y,
-        // the rows' W = D^2; sum t W A and sum t W y from the drift sums.
-        Mw m(n2, n2);
-        Vw b(n2);
-        for (int j = 0; j < n; ++j) {
-            for (int i = 0; i < n; ++i) m(i, j) = static_cast<double>(in.iv_m[j * n + i]);
-            b(j) = static_cast<double>(in.iv_b[j]);
-        }
-        for (int r = 0; r < LOADID_NROWS; ++r) {
-            const double d = static_cast<double>(in.row_weight[r]);
-            for (int j = 0; j < n; ++j) {
-                m(j, n + r) = in.iv_drift[r * n + j];
-                m(n + r, j) = d * in.drift_cross[j * 6 + r] / t(j);
-            }
-            for (int c = 0; c < LOADID_NROWS; ++c)
-                m(n + r, n + c) = r == c ? d * d * in.drift_tt : 0;
-            b(n + r) = d * in.drift_y[r] / t(n);
-        }
-        const Eigen::PartialPivLU<Md> part(Md(m.topLeftCorner(n, n)));
-        const Vd iv16 = part.solve(Vd(b.head(n)));
-        const Vw iv22 = Eigen::PartialPivLU<Mw>(m).solve(b);
-        if (!iv16.allFinite() || !iv22.allFinite()) return Md::Zero(n, n);
-        const Vd dphi = iv16 - iv22.head(n);
-        return dphi * dphi.transpose();
-    }
-    // Least squares, in the weighted coordinates x = T^-1 phi; the drift
-    // columns t_k E6 weighted by the rows' D.
-    Mw h = Mw::Zero(n2, n2);
-    Vw rhs(n2);
-    h.topLeftCorner(n, n) = gs.topLeftCorner(n, n);
-    rhs.head(n) = gs.col(n).head(n);
-    for (int r = 0; r < LOADID_NROWS; ++r) {
-        const double d = static_cast<double>(in.row_weight[r]);
-        for (int j = 0; j < n; ++j) h(j, n + r) = h(n + r, j) = d * in.drift_cross[j * 6 + r];
-        h(n + r, n + r) = d * d * in.drift_tt;
-        rhs(n + r) = d * in.drift_y[r];
-    }
-    Eigen::LDLT<Mw> full(h);
-    Eigen::LDLT<Md> part(Md(h.topLeftCorner(n, n)));
-    if (full.info() != Eigen::Success || part.info() != Eigen::Success) return Md::Zero(n, n);
-    const Vw x22 = full.solve(rhs);
-    const Vd x16 = part.solve(Vd(rhs.head(n)));
-    if (!x22.allFinite() || !x16.allFinite()) return Md::Zero(n, n);
-    const Vd dphi = t.head(n).cwiseProduct(x16 - x22.head(n));
-    return dphi * dphi.transpose();
-}
-
 // What covariance_std works on: the weighted Gram of [A y] with column
 // weights t (gs, and gts over the torque rows), np columns estimated at
 // phi (np values), IV's M and C^T W C (unweighted). The columns from
@@ -175,8 +114,10 @@ Problem plain(const CovInput &in) {
 
 // The problem with the offset's linear drift fitted too (uncertainty.hpp):
 // six exact columns tau_k E6 after the n parameters (column weight 1), at
-// phi less the drift's pull and the drift's fitted rate. pull: n values.
-// False without the drift sums or when a fit is singular.
+// phi less the drift's pull and the drift's fitted rate; pull (n values):
+// the least-squares estimate (IV's for IV) with a constant offset less the
+// one with the drift. False without the drift sums (IV: its own too) or
+// when a fit is singular.
 bool with_drift(const CovInput &in, Problem &p, Vd &pull) {
     const int n = in.n, nd = LOADID_NROWS, n2 = n + nd;
     if (!in.drift_cross || !in.drift_y || !in.row_weight || n != LOADID_NPHI_OFFSET) return false;
@@ -258,6 +199,15 @@ bool with_drift(const CovInput &in, Problem &p, Vd &pull) {
     return true;
 }
 
+// d d^T, d = phi_16 - phi_22, the drift's pull (with_drift): the
+// witness of a drift the estimate has not fitted (uncertainty.hpp).
+Md drift_share(const CovInput &in) {
+    Problem p;
+    Vd pull;
+    if (!with_drift(in, p, pull)) return Md::Zero(in.n, in.n);
+    return pull * pull.transpose();
+}
+
 int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) {
     const int n = p.np, n1 = n + 1;
     for (int i = 0; i < in.n; ++i) std[i] = std::numeric_limits<Real>::infinity();
@@ -295,8 +245,7 @@ int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) 
         const Md mi = lu.inverse();
         if (!mi.allFinite()) return LOADID_E_NOT_EXCITED;
         if (p.witness)
-            cov = s2_iv * mi * p.cc * mi.transpose() + offset_share(in, t, mi) +
-                  drift_share(in, gs, t);
+            cov = s2_iv * mi * p.cc * mi.transpose() + offset_share(in, t, mi) + drift_share(in);
         else
             cov = s2_iv * mi * p.cc * mi.transpose();
     } else {
@@ -329,7 +278,7 @@ int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) 
         const Md meat = sf2 * gf.topLeftCorner(n, n) + st2 * gt.topLeftCorner(n, n);
         if (p.witness)
             cov = hi * meat * hi + offset_share(in, t, hi) +
-                  attenuation_share(in, t, phi, g.topLeftCorner(n, n)) + drift_share(in, gs, t);
+                  attenuation_share(in, t, phi, g.topLeftCorner(n, n)) + drift_share(in);
         else
             cov = hi * meat * hi + attenuation_share(in, t, phi, g.topLeftCorner(n, n));
     }
