@@ -76,13 +76,19 @@ static void invert(double *M, int n, double *inv) {
     }
 }
 
+/* An estimator of cfg fed all of d. */
+static loadid_est_t *fed(const dataset_t *d, const loadid_est_config_t *cfg) {
+    loadid_est_t *est;
+    assert_int_equal(loadid_est_create(cfg, &est), 0);
+    assert_int_equal(dataset_feed(d, est, 0, d->n_samples), 0);
+    return est;
+}
+
 /* An estimator of cfg fed all of d: its estimate, phi_std (n_params
  * values each) and scale. */
 static void fit(const dataset_t *d, const loadid_est_config_t *cfg, loadid_real_t *phi,
                 loadid_real_t *std, loadid_real_t *scale) {
-    loadid_est_t *est;
-    assert_int_equal(loadid_est_create(cfg, &est), 0);
-    assert_int_equal(dataset_feed(d, est, 0, d->n_samples), 0);
+    loadid_est_t *est = fed(d, cfg);
     assert_int_equal(loadid_est_estimate(est, phi, NULL), 0);
     assert_int_equal(loadid_est_uncertainty(est, phi, std, scale), 0);
     loadid_est_destroy(est);
@@ -90,20 +96,15 @@ static void fit(const dataset_t *d, const loadid_est_config_t *cfg, loadid_real_
 
 /* fit's (the estimate without the noise-ratio test, as the pipeline's
  * final one may be), and loadid_est_drift_fitted's phi_fitted and std (16
- * values); returns the estimate's code. */
-static int fit_drift(const dataset_t *d, const loadid_est_config_t *cfg, loadid_real_t *phi,
-                     loadid_real_t *std, loadid_real_t *phi_fitted, loadid_real_t *std_fitted) {
-    loadid_est_t *est;
+ * values). */
+static void fit_drift(const dataset_t *d, const loadid_est_config_t *cfg, loadid_real_t *phi,
+                      loadid_real_t *std, loadid_real_t *phi_fitted, loadid_real_t *std_fitted) {
+    loadid_est_t *est = fed(d, cfg);
     loadid_real_t scale;
-    assert_int_equal(loadid_est_create(cfg, &est), 0);
-    assert_int_equal(dataset_feed(d, est, 0, d->n_samples), 0);
-    const int rc = loadid_est_estimate_unique(est, phi, NULL);
-    if (rc == 0) {
-        assert_int_equal(loadid_est_uncertainty(est, phi, std, &scale), 0);
-        assert_int_equal(loadid_est_drift_fitted(est, phi, phi_fitted, std_fitted, &scale), 0);
-    }
+    assert_int_equal(loadid_est_estimate_unique(est, phi, NULL), 0);
+    assert_int_equal(loadid_est_uncertainty(est, phi, std, &scale), 0);
+    assert_int_equal(loadid_est_drift_fitted(est, phi, phi_fitted, std_fitted, &scale), 0);
     loadid_est_destroy(est);
-    return rc;
 }
 
 /* A zeroing window of zero_samples samples: y0's error covariance, with a
@@ -259,7 +260,7 @@ static void test_drift_witness_equals_least_squares(void **state) {
     dataset_config(&spec, LOADID_METHOD_LS_BATCH, &cfg);
     for (int i = 0; i < 3; ++i) cfg.row_sigma[i] = 0.1f, cfg.row_sigma[3 + i] = 0.005f;
     loadid_real_t phi[16], std[16], phi_f[16], std_f[16];
-    assert_int_equal(fit_drift(&d, &cfg, phi, std, phi_f, std_f), 0);
+    fit_drift(&d, &cfg, phi, std, phi_f, std_f);
     /* Reference: H22 = sum a a^T w over rows a = [A_k row, t_k e_r], and
      * the force and torque rows' Gram matrices for the sandwich (G over
      * the 16 columns, G22 over all 22). */
@@ -372,7 +373,7 @@ static void test_riv_drift_witness_is_its_own_pull(void **state) {
     loadid_est_config_t cfg;
     dataset_config(&spec, LOADID_METHOD_RIV, &cfg);
     loadid_real_t phi[16], std[16], phi_f[16], std_f[16];
-    assert_int_equal(fit_drift(&d, &cfg, phi, std, phi_f, std_f), 0);
+    fit_drift(&d, &cfg, phi, std, phi_f, std_f);
     enum { N = 16, N2 = 22 };
     /* M22 = sum c a^T w over rows (c, a: [C row, t e_r], [A row, t e_r]);
      * the LS normal equations beside it; C^T W C over 16 and 22 columns. */
@@ -572,7 +573,7 @@ static void test_drift_fitted_coverage(void **state) {
                     cfg.row_sigma[i] = (loadid_real_t)y_only.sigma_f,
                     cfg.row_sigma[3 + i] = (loadid_real_t)y_only.sigma_tau;
             loadid_real_t phi[16], std[16], phi_f[16], std_f[16];
-            assert_int_equal(fit_drift(&d, &cfg, phi, std, phi_f, std_f), 0);
+            fit_drift(&d, &cfg, phi, std, phi_f, std_f);
             for (int j = 0; j < 16; ++j) {
                 /* the offset at the window's mid time */
                 const double truth =
@@ -603,9 +604,7 @@ static void test_drift_fitted_coverage(void **state) {
     assert_int_equal(dataset_make(&spec, &d), 0);
     loadid_est_config_t cfg;
     dataset_config(&spec, LOADID_METHOD_RLS, &cfg);
-    loadid_est_t *est;
-    assert_int_equal(loadid_est_create(&cfg, &est), 0);
-    assert_int_equal(dataset_feed(&d, est, 0, d.n_samples), 0);
+    loadid_est_t *est = fed(&d, &cfg);
     loadid_real_t phi[10], out[10], std[10];
     for (int j = 0; j < 10; ++j) phi[j] = (loadid_real_t)d.truth[j];
     assert_int_equal(loadid_est_drift_fitted(est, phi, out, std, NULL), -ENOTSUP);
@@ -788,9 +787,7 @@ static void test_still_pose_is_undetermined(void **state) {
     assert_int_equal(dataset_make(&spec, &d), 0);
     loadid_est_config_t cfg;
     dataset_config(&spec, LOADID_METHOD_LS_BATCH, &cfg);
-    loadid_est_t *est;
-    assert_int_equal(loadid_est_create(&cfg, &est), 0);
-    assert_int_equal(dataset_feed(&d, est, 0, d.n_samples), 0);
+    loadid_est_t *est = fed(&d, &cfg);
     const loadid_real_t phi[10] = {1, 0, 0, 0, 0, 0, 0, 0, 0, 0};
     loadid_real_t std[10];
     assert_int_equal(loadid_est_uncertainty(est, phi, std, NULL), LOADID_E_NOT_EXCITED);
@@ -801,8 +798,7 @@ static void test_still_pose_is_undetermined(void **state) {
     spec.noise = kPaperNoise;
     assert_int_equal(dataset_make(&spec, &d), 0);
     dataset_config(&spec, LOADID_METHOD_TLS_BATCH, &cfg);
-    assert_int_equal(loadid_est_create(&cfg, &est), 0);
-    assert_int_equal(dataset_feed(&d, est, 0, d.n_samples), 0);
+    est = fed(&d, &cfg);
     loadid_real_t est_phi[10];
     const int rc = loadid_est_estimate(est, est_phi, NULL);
     if (rc == 0 && loadid_est_uncertainty(est, est_phi, std, NULL) == 0) {
