@@ -610,6 +610,22 @@ static void test_drift_fitted_coverage(void **state) {
     assert_int_equal(loadid_est_drift_fitted(est, phi, out, std, NULL), -ENOTSUP);
     loadid_est_destroy(est);
     dataset_free(&d);
+    /* Sixteen: a phi that is not finite, or no place for the answer. */
+    spec.n_params = 16;
+    assert_int_equal(dataset_make(&spec, &d), 0);
+    dataset_config(&spec, LOADID_METHOD_RLS, &cfg);
+    est = fed(&d, &cfg);
+    loadid_real_t phi16[16], out16[16], std16[16];
+    for (int j = 0; j < 16; ++j) phi16[j] = (loadid_real_t)d.truth[j];
+    phi16[3] = (loadid_real_t)NAN;
+    assert_int_equal(loadid_est_drift_fitted(est, phi16, out16, std16, NULL), LOADID_E_NONFINITE);
+    phi16[3] = (loadid_real_t)d.truth[3];
+    assert_int_equal(loadid_est_drift_fitted(est, phi16, NULL, std16, NULL), -EINVAL);
+    assert_int_equal(loadid_est_drift_fitted(NULL, phi16, out16, std16, NULL), -EINVAL);
+    assert_int_equal(loadid_est_drift_fitted(est, phi16, out16, std16, NULL), 0);
+    for (int j = 0; j < 16; ++j) assert_true(isfinite(out16[j]) && isfinite(std16[j]));
+    loadid_est_destroy(est);
+    dataset_free(&d);
 }
 
 static void test_zeroing_noise_refused(void **state) {
