@@ -112,16 +112,15 @@ Problem plain(const CovInput &in) {
     return p;
 }
 
-// The problem with the offset's linear drift fitted too (uncertainty.hpp):
+// q (plain) with the offset's linear drift fitted too (uncertainty.hpp):
 // six exact columns tau_k E6 after the n parameters (column weight 1), at
 // phi less the drift's pull and the drift's fitted rate; pull (n values):
 // the least-squares estimate (IV's for IV) with a constant offset less the
 // one with the drift. False without the drift sums (IV: its own too) or
 // when a fit is singular.
-bool with_drift(const CovInput &in, Problem &p, Vd &pull) {
+bool with_drift(const CovInput &in, const Problem &q, Problem &p, Vd &pull) {
     const int n = in.n, nd = LOADID_NROWS, n2 = n + nd;
     if (!in.drift_cross || !in.drift_y || !in.row_weight || n != LOADID_NPHI_OFFSET) return false;
-    const Problem q = plain(in);
     p = q;
     p.np = n2;
     p.witness = false;
@@ -201,10 +200,10 @@ bool with_drift(const CovInput &in, Problem &p, Vd &pull) {
 
 // d d^T, d = phi_16 - phi_22, the drift's pull (with_drift): the
 // witness of a drift the estimate has not fitted (uncertainty.hpp).
-Md drift_share(const CovInput &in) {
+Md drift_share(const CovInput &in, const Problem &q) {
     Problem p;
     Vd pull;
-    if (!with_drift(in, p, pull)) return Md::Zero(in.n, in.n);
+    if (!with_drift(in, q, p, pull)) return Md::Zero(in.n, in.n);
     return pull * pull.transpose();
 }
 
@@ -245,7 +244,7 @@ int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) 
         const Md mi = lu.inverse();
         if (!mi.allFinite()) return LOADID_E_NOT_EXCITED;
         if (p.witness)
-            cov = s2_iv * mi * p.cc * mi.transpose() + offset_share(in, t, mi) + drift_share(in);
+            cov = s2_iv * mi * p.cc * mi.transpose() + offset_share(in, t, mi) + drift_share(in, p);
         else
             cov = s2_iv * mi * p.cc * mi.transpose();
     } else {
@@ -278,7 +277,7 @@ int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) 
         const Md meat = sf2 * gf.topLeftCorner(n, n) + st2 * gt.topLeftCorner(n, n);
         if (p.witness)
             cov = hi * meat * hi + offset_share(in, t, hi) +
-                  attenuation_share(in, t, phi, g.topLeftCorner(n, n)) + drift_share(in);
+                  attenuation_share(in, t, phi, g.topLeftCorner(n, n)) + drift_share(in, p);
         else
             cov = hi * meat * hi + attenuation_share(in, t, phi, g.topLeftCorner(n, n));
     }
@@ -297,7 +296,7 @@ int covariance_std(const CovInput &in, Real *std, Real *scale) {
     Vd pull;
     for (int i = 0; i < in.n; ++i) std[i] = std::numeric_limits<Real>::infinity();
     *scale = std::numeric_limits<Real>::quiet_NaN();
-    if (!with_drift(in, p, pull)) return LOADID_E_NOT_EXCITED;
+    if (!with_drift(in, plain(in), p, pull)) return LOADID_E_NOT_EXCITED;
     const Vd reported = p.out * p.phi;
     for (int i = 0; i < in.n; ++i) in.phi_fitted[i] = static_cast<Real>(reported(i));
     return covariance_of(in, p, std, scale);

@@ -382,10 +382,11 @@ static void final_phi(const loadid_pipeline_t *p, int m, loadid_real_t *phi, loa
     }
     if (loadid_est_uncertainty(p->est[m], phi, std, scale) != 0)
         for (int i = 0; i < 16; ++i) std[i] = (loadid_real_t)INFINITY;
-    const double *extra = zeroed_drift ? p->drift_result.extra_var
-                          : m == p->refined_m && p->refined_rep.drift_fitted
-                              ? p->refined_rep.drift_var
-                              : NULL;
+    const double *extra = NULL; /* what fitting the drift costs */
+    if (zeroed_drift)
+        extra = p->drift_result.extra_var;
+    else if (m == p->refined_m && p->refined_rep.drift_fitted)
+        extra = p->refined_rep.drift_var;
     if (extra)
         for (int i = 0; i < 10; ++i)
             std[i] = (loadid_real_t)sqrt((double)std[i] * (double)std[i] + extra[i]);

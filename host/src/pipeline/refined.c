@@ -304,6 +304,12 @@ static double drift_dt(const loadid_refined_t *r, int i, int64_t t_ref) {
     return t_ref == INT64_MIN ? 0 : (double)(r->s[i].t - t_ref) * 1e-6;
 }
 
+/* The fitted drift's part of row's wrench dt after t_ref (x: a fit's
+ * solution of cols columns, the drift's after the n parameters). */
+static double drift_part(const double *x, int n, int cols, int row, double dt) {
+    return cols > n ? x[n + row] * dt : 0;
+}
+
 /* The weighted residual of a least-squares fit on the stored kinematics
  * (rows weighted by force_sigma, torque_sigma; fit_cols columns), by the
  * normal equations; +Inf when they are singular. rss_group (may be NULL):
@@ -340,7 +346,7 @@ static double fit_residual(const loadid_refined_t *r, int n_params, const loadid
             const double dt = drift_dt(r, i, t_ref);
             for (int row = 0; row < 6; ++row)
                 rss_group[row / 3] += sq((double)r->s[i].y[row] - (double)pred[row] -
-                                         (cols > n ? x[n + row] * dt : 0));
+                                         drift_part(x, n, cols, row, dt));
         }
     }
     return yy - fit;
@@ -396,7 +402,7 @@ static delay_step_t delay_step(const loadid_refined_t *r, int n_params, const lo
              * the drift's does not. */
             const double c = (double)(pred[2][row] - pred[0][row]) / (double)(t[2] - t[0]);
             const double res =
-                (double)r->s[m].y[row] - (double)pred[1][row] - (cols > n ? x[n + row] * dt : 0);
+                (double)r->s[m].y[row] - (double)pred[1][row] - drift_part(x, n, cols, row, dt);
             double a[MAX_COLS];
             for (int p = 0; p < n; ++p) a[p] = (double)A[1][row * n + p];
             for (int p = n; p < cols; ++p) a[p] = p - n == row ? dt : 0;
