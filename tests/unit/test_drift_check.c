@@ -60,29 +60,42 @@ static void phases(loadid_rng_t *rng, double w[3][3]) {
         for (int j = 0; j < 3; ++j) w[i][j] = uniform_in(rng, 0, TWO_PI);
 }
 
-/* Samples at 1 kHz for seconds, t0 the zeroing's time (tau = t - t0). */
+/* The zeroing's time: a window's sample k is at k ms, tau_k after it. */
+#define T0_US (-200000)
+
+static double tau_of(int k) {
+    return (double)(k * 1000 - T0_US) * 1e-6;
+}
+
+/* A new window: the motion's phases drawn, the check reset at T0_US. */
+static void begin(loadid_rng_t *rng, double w[3][3]) {
+    phases(rng, w);
+    loadid_drift_check_reset(&check, T0_US, SIGMA_F, SIGMA_T);
+}
+
+/* One sample to least squares on [A  tau E6] (ls16) and on A (ls10). */
+static void feed_ls(loadid_est_t *ls16, loadid_est_t *ls10, const loadid_real_t A[60],
+                    const loadid_real_t y[6], double tau) {
+    loadid_real_t A16[6 * 16] = {0};
+    for (int r = 0; r < 6; ++r) {
+        for (int j = 0; j < 10; ++j) A16[r * 16 + j] = A[r * 10 + j];
+        A16[r * 16 + 10 + r] = (loadid_real_t)tau;
+    }
+    assert_int_equal(loadid_est_update(ls16, A16, NULL, y), 0);
+    assert_int_equal(loadid_est_update(ls10, A, NULL, y), 0);
+}
+
+/* Samples at 1 kHz for seconds (sample() drifts from the zeroing too). */
 static void run(loadid_rng_t *rng, double seconds, const double drift[6], loadid_est_t *ls16,
                 loadid_est_t *ls10) {
     double w[3][3];
-    phases(rng, w);
-    const int64_t t0_us = -200000;
-    loadid_drift_check_reset(&check, t0_us, SIGMA_F, SIGMA_T);
+    begin(rng, w);
     const int n = (int)llround(seconds * 1000);
     for (int k = 0; k < n; ++k) {
-        const int64_t t_us = k * 1000;
         loadid_real_t A[60], y[6];
-        sample(rng, w, (double)(t_us - t0_us) * 1e-6, drift, A, y);
-        /* sample() drifts from t0 too: tau = t - t0 */
-        loadid_drift_check_add(&check, t_us, A, y);
-        if (ls16) {
-            loadid_real_t A16[6 * 16] = {0};
-            for (int r = 0; r < 6; ++r) {
-                for (int j = 0; j < 10; ++j) A16[r * 16 + j] = A[r * 10 + j];
-                A16[r * 16 + 10 + r] = (loadid_real_t)((double)(t_us - t0_us) * 1e-6);
-            }
-            assert_int_equal(loadid_est_update(ls16, A16, NULL, y), 0);
-            assert_int_equal(loadid_est_update(ls10, A, NULL, y), 0);
-        }
+        sample(rng, w, tau_of(k), drift, A, y);
+        loadid_drift_check_add(&check, k * 1000, A, y);
+        if (ls16) feed_ls(ls16, ls10, A, y, tau_of(k));
     }
 }
 
@@ -199,14 +212,12 @@ static void test_iv_pull_equals_riv_on_the_detrended_wrench(void **state) {
     loadid_rng_t rng;
     loadid_rng_seed(&rng, 17);
     double w[3][3];
-    phases(&rng, w);
-    const int64_t t0_us = -200000;
+    begin(&rng, w);
     const int n = 1500;
     static loadid_real_t As[1500][60], Cs[1500][60], ys[1500][6];
     const loadid_real_t spec_lag = (loadid_real_t)0.1;
-    loadid_drift_check_reset(&check, t0_us, SIGMA_F, SIGMA_T);
     for (int k = 0; k < n; ++k) {
-        const double t = (double)(k * 1000 - t0_us) * 1e-6;
+        const double t = tau_of(k);
         sample(&rng, w, t, kRate, As[k], ys[k]);
         for (int i = 0; i < 60; ++i)
             Cs[k][i] = As[k][i] * (1 + spec_lag * (loadid_real_t)sin(0.7 * i + t));
@@ -227,7 +238,7 @@ static void test_iv_pull_equals_riv_on_the_detrended_wrench(void **state) {
         assert_int_equal(loadid_est_create(&cfg, &riv[e]), 0);
     }
     for (int k = 0; k < n; ++k) {
-        const double tau = (double)(k * 1000 - t0_us) * 1e-6;
+        const double tau = tau_of(k);
         loadid_real_t y2[6];
         for (int row = 0; row < 6; ++row) y2[row] = (loadid_real_t)(ys[k][row] - r.rate[row] * tau);
         assert_int_equal(loadid_est_update(riv[0], As[k], Cs[k], ys[k]), 0);
@@ -250,7 +261,7 @@ static void test_iv_pull_equals_riv_on_the_detrended_wrench(void **state) {
     assert_true(worst_ls > 3 * worst);
     for (int e = 0; e < 2; ++e) loadid_est_destroy(riv[e]);
     /* Without instruments there is no IV pull. */
-    loadid_drift_check_reset(&check, t0_us, SIGMA_F, SIGMA_T);
+    loadid_drift_check_reset(&check, T0_US, SIGMA_F, SIGMA_T);
     assert_int_equal(loadid_drift_check_iv_pull(&check, &r, pull), -1);
 }
 
@@ -265,15 +276,13 @@ static void test_extra_var_is_the_pulls_jackknife(void **state) {
     loadid_rng_t rng;
     loadid_rng_seed(&rng, 23);
     double w[3][3];
-    phases(&rng, w);
-    const int64_t t0_us = -200000;
+    begin(&rng, w);
     enum { n = 1500, blocks = 15 };
     static loadid_real_t As[n][60], ys[n][6];
-    loadid_drift_check_reset(&check, t0_us, SIGMA_F, SIGMA_T);
     double ph[6];
     for (int r = 0; r < 6; ++r) ph[r] = uniform_in(&rng, 0, TWO_PI);
     for (int k = 0; k < n; ++k) {
-        const double t = (double)(k * 1000 - t0_us) * 1e-6;
+        const double t = tau_of(k);
         sample(&rng, w, t, kRate, As[k], ys[k]);
         for (int r = 0; r < 6; ++r)
             ys[k][r] +=
@@ -287,16 +296,8 @@ static void test_extra_var_is_the_pulls_jackknife(void **state) {
     double pulls[blocks][10], mean[10] = {0};
     for (int b = 0; b < blocks; ++b) {
         loadid_est_t *ls16 = batch_ls(16, n), *ls10 = batch_ls(10, n);
-        for (int k = 0; k < n; ++k) {
-            if (k / 100 == b) continue;
-            loadid_real_t A16[6 * 16] = {0};
-            for (int row = 0; row < 6; ++row) {
-                for (int j = 0; j < 10; ++j) A16[row * 16 + j] = As[k][row * 10 + j];
-                A16[row * 16 + 10 + row] = (loadid_real_t)((double)(k * 1000 - t0_us) * 1e-6);
-            }
-            assert_int_equal(loadid_est_update(ls16, A16, NULL, ys[k]), 0);
-            assert_int_equal(loadid_est_update(ls10, As[k], NULL, ys[k]), 0);
-        }
+        for (int k = 0; k < n; ++k)
+            if (k / 100 != b) feed_ls(ls16, ls10, As[k], ys[k], tau_of(k));
         loadid_real_t theta[16], phi10[10];
         assert_int_equal(loadid_est_estimate(ls16, theta, NULL), 0);
         assert_int_equal(loadid_est_estimate(ls10, phi10, NULL), 0);
