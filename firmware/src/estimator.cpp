@@ -278,6 +278,48 @@ extern "C" int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real
     return rc;
 }
 
+static bool all_finite_d(const double *x, int n) {
+    for (int i = 0; i < n; ++i)
+        if (!std::isfinite(x[i])) return false;
+    return true;
+}
+
+// A spectrum that fits the estimator: its samples, ordered bins, band 0
+// the mean alone, RIV's instruments' bands.
+static int spectrum_fits(const loadid::CovInput &in, const loadid_spectrum_t &sp) {
+    if (sp.n_bands < 2 || sp.n_bands > LOADID_SPECTRUM_BANDS || sp.samples != in.samples ||
+        sp.first_bin[0] != 0 || sp.first_bin[1] != 1 ||
+        (in.kind == loadid::CovKind::IV && !sp.has_iv))
+        return -EINVAL;
+    for (int b = 1; b <= sp.n_bands; ++b)
+        if (sp.first_bin[b] <= sp.first_bin[b - 1]) return -EINVAL;
+    const int n = in.n, n1 = n + 1;
+    const bool iv = in.kind == loadid::CovKind::IV;
+    for (int g = 0; g < 2; ++g) {
+        for (int b = 0; b < sp.n_bands; ++b) {
+            if (!all_finite_d(sp.gram[b][g], n1 * n1)) return LOADID_E_NONFINITE;
+            if (iv && !all_finite_d(sp.iv_gram[b][g], n * n)) return LOADID_E_NONFINITE;
+        }
+        if (iv && !all_finite_d(sp.iv_total[g], n * n)) return LOADID_E_NONFINITE;
+    }
+    return 0;
+}
+
+extern "C" int loadid_est_uncertainty_spectral(const loadid_est_t *est, const loadid_real_t *phi,
+                                               const loadid_spectrum_t *sp, loadid_real_t *std,
+                                               loadid_real_t *scale) {
+    if (!est || !phi || !sp || !std) return -EINVAL;
+    if (!all_finite(phi, est->cfg.n_params)) return LOADID_E_NONFINITE;
+    loadid::CovInput in = est->information(phi);
+    const int fit = spectrum_fits(in, *sp);
+    if (fit != 0) return fit;
+    in.spectrum = sp;
+    loadid_real_t s;
+    const int rc = covariance_std(in, std, &s);
+    if (scale) *scale = s;
+    return rc;
+}
+
 extern "C" int loadid_est_drift_fitted(const loadid_est_t *est, const loadid_real_t *phi,
                                        loadid_real_t *phi_fitted, loadid_real_t *std,
                                        loadid_real_t *scale) {

@@ -207,6 +207,78 @@ Md drift_share(const CovInput &in, const Problem &q) {
     return pull * pull.transpose();
 }
 
+// A full matrix from a column-major block of n x n values.
+Md full(const double *m, int n) {
+    Md out(n, n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) out(i, j) = m[j * n + i];
+    return out;
+}
+
+// The sandwich's meat from the residual's level per band of frequency
+// (uncertainty.hpp): for each row group g (gf, gt: the force and torque
+// rows' Gram of [A y], columns unweighted) and band, S_gb = v^T G v over
+// the band's values less the fit's leverage tr(H^-1 G_AA) there, at least
+// the wrench noise measured apart; the meat sums S_gb G_AA (IV: the
+// instruments' Gram). False without a spectrum or for another problem
+// than the estimate's own (the drift's).
+bool spectral_meat(const CovInput &in, const Problem &p, const Md &gf, const Md &gt, const Vd &v,
+                   Md &meat) {
+    constexpr double kMinDof = 12; // a band with fewer joins the next
+    const loadid_spectrum_t *sp = in.spectrum;
+    const int n = p.np, n1 = n + 1;
+    if (!sp || n != in.n) return false;
+    const bool iv = in.kind == CovKind::IV;
+    Md hi;
+    if (!spd_inverse(Md((gf + gt).topLeftCorner(n, n)), hi)) return false;
+    meat = Md::Zero(n, n);
+    for (int grp = 0; grp < 2; ++grp) {
+        double floor = 0;
+        if (in.noise_sigma && in.row_weight)
+            floor = std::pow(static_cast<double>(in.noise_sigma[grp]) *
+                                 static_cast<double>(in.row_weight[3 * grp]),
+                             2);
+        Md rest = grp == 0 ? gf : gt, rest_iv;
+        if (iv) rest_iv = full(sp->iv_total[grp], n);
+        Md pend = Md::Zero(n1, n1), pend_iv = Md::Zero(n, n);
+        double pend_rr = 0, pend_dof = 0, pend_lev = 0, used = 0;
+        for (int b = 0; b <= sp->n_bands; ++b) {
+            Md band, band_iv;
+            double dof = 0, rr = 0, lev = 0;
+            if (b < sp->n_bands) {
+                band = full(sp->gram[b][grp], n1);
+                rest -= band;
+                if (iv) {
+                    band_iv = full(sp->iv_gram[b][grp], n);
+                    rest_iv -= band_iv;
+                }
+                // Three channels, two real values a bin (one for the mean).
+                const double values = b == 0 ? 3 : 6.0 * (sp->first_bin[b + 1] - sp->first_bin[b]);
+                used += values;
+                if (b > 0) { // band 0's residual holds the zeroing offset's error
+                    dof = values;
+                    rr = v.dot(band * v);
+                    lev = (hi * band.topLeftCorner(n, n)).trace();
+                }
+            } else {
+                band = rest, band_iv = rest_iv;
+                dof = 3.0 * static_cast<double>(in.samples) - used;
+                rr = v.dot(rest * v);
+                lev = (hi * rest.topLeftCorner(n, n)).trace();
+            }
+            pend += band, pend_rr += rr, pend_dof += dof, pend_lev += lev;
+            if (iv) pend_iv += band_iv;
+            if (b < sp->n_bands && pend_dof - pend_lev < kMinDof) continue;
+            const double level =
+                std::max(std::max(pend_rr, 0.0) / std::max(pend_dof - pend_lev, 1.0), floor);
+            meat += level * (iv ? pend_iv : Md(pend.topLeftCorner(n, n)));
+            pend.setZero(), pend_iv.setZero();
+            pend_rr = pend_dof = pend_lev = 0;
+        }
+    }
+    return meat.allFinite();
+}
+
 int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) {
     const int n = p.np, n1 = n + 1;
     for (int i = 0; i < in.n; ++i) std[i] = std::numeric_limits<Real>::infinity();
@@ -238,15 +310,18 @@ int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) 
         }
     }
     const double s2_iv = (sf2 + st2) / 2;
+    Md smeat;
+    const bool spectral = spectral_meat(in, p, gf, gt, v, smeat);
     Md cov(n, n);
     if (in.kind == CovKind::IV) {
         Eigen::PartialPivLU<Md> lu(p.m);
         const Md mi = lu.inverse();
         if (!mi.allFinite()) return LOADID_E_NOT_EXCITED;
+        const Md meat = spectral ? smeat : Md(s2_iv * p.cc);
         if (p.witness)
-            cov = s2_iv * mi * p.cc * mi.transpose() + offset_share(in, t, mi) + drift_share(in, p);
+            cov = mi * meat * mi.transpose() + offset_share(in, t, mi) + drift_share(in, p);
         else
-            cov = s2_iv * mi * p.cc * mi.transpose();
+            cov = mi * meat * mi.transpose();
     } else {
         Md h = g.topLeftCorner(n, n);
         if (in.kind == CovKind::TLS) {
@@ -274,7 +349,8 @@ int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) 
         }
         Md hi;
         if (!spd_inverse(h, hi)) return LOADID_E_NOT_EXCITED;
-        const Md meat = sf2 * gf.topLeftCorner(n, n) + st2 * gt.topLeftCorner(n, n);
+        const Md meat =
+            spectral ? smeat : Md(sf2 * gf.topLeftCorner(n, n) + st2 * gt.topLeftCorner(n, n));
         if (p.witness)
             cov = hi * meat * hi + offset_share(in, t, hi) +
                   attenuation_share(in, t, phi, g.topLeftCorner(n, n)) + drift_share(in, p);

@@ -38,6 +38,15 @@
 // motion varies it, and its error is the measurement's: a UR5 at |omega|
 // <= 0.2 rad/s lost 26 % of the mass at 3.4 % phi_std. IV's instruments
 // do not see the columns' noise.
+// A misfit of the motion model puts the residual's power at tens of Hz
+// (backlash: 30-100 times the noise at 5-100 Hz on the simulated RX60),
+// while the regressor's lies below a few Hz, and what reaches phi is the
+// residual's level where the regressor has power: sum_f |A(f)|^2 S(f), not
+// S's mean times A^T W A. Given the data's DFT in bands (spectrum), the
+// meat is sum over bands and row groups of S_gb G_gb, S_gb measured per
+// band (the fit's leverage there taken off its degrees of freedom); the
+// backlash cells' 99-100 % coverage at RMS error / std 0.3-0.6 came from
+// the white meat.
 // With the offset estimated, a constant offset is all the on-line methods
 // fit, but an F/T sensor's offset drifts (warming up), and on slow motion
 // a drift of 0.05 N/s and 0.002 N m/s moved RIV's COM by 26 mm at 5 mm
@@ -57,6 +66,7 @@
 #include <cstdint>
 
 #include "eigen_types.hpp"
+#include "loadid/estimator.h"
 
 namespace loadid {
 
@@ -106,6 +116,10 @@ struct CovInput {
     // (exact, for TLS eliminated before the noise's share comes off), at
     // its own residual.
     Real *phi_fitted = nullptr;
+    // Non-null: the residual's level per band of frequency (estimator.h,
+    // loadid_spectrum_t) in the sandwich's meat instead of one level per
+    // row group; used for the estimate's own problem (not the drift's).
+    const loadid_spectrum_t *spectrum = nullptr;
 };
 
 // Fills std (n values) and *scale (s). Returns 0, or LOADID_E_NOT_EXCITED
