@@ -12,6 +12,7 @@
 #include "loadid/jr3.h"
 #include "loadid/setup.h"
 #include "drift_check.h"
+#include "spectrum_rows.h"
 #include "worker.h"
 
 #define MIN_ZEROING_SAMPLES 10
@@ -99,6 +100,12 @@ struct loadid_pipeline {
     loadid_drift_result_t drift_result;
     int drift_significant;    /* the final estimates are corrected by its pull */
     double drift_iv_pull[10]; /* RIV's pull (the least-squares one without instruments) */
+    /* the window's rows as the on-line methods took them, transformed at
+     * DONE for phi_std by band (spectrum_rows.h); the bands of one method
+     * at a time (REFINED's apart: its job runs beside the loop) */
+    loadid_spectrum_rows_t *rows;
+    int rows_ready;
+    loadid_spectrum_t *bands, *refined_bands;
     /* estimation */
     int64_t est_end_us, last_sample_us, since_publish;
     int64_t start_us;      /* START's utime */
@@ -219,6 +226,16 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
         what = "the joint filter's noise";
     }
     p->num_methods = cfg->num_methods;
+    int instruments = 0;
+    for (int m = 0; m < p->num_methods; ++m) instruments |= cfg->methods[m] == LOADID_METHOD_RIV;
+    if (rc == 0) {
+        rc = loadid_spectrum_rows_create((int)ceil(cfg->duration_s * 2000) + 100, p->n_params,
+                                         instruments, &p->rows);
+        p->bands = malloc(sizeof *p->bands);
+        p->refined_bands = malloc(sizeof *p->refined_bands);
+        if (rc == 0 && !(p->bands && p->refined_bands)) rc = -ENOMEM;
+        what = "the window's rows";
+    }
     for (int m = 0; m < p->num_methods && rc == 0; ++m) {
         loadid_est_config_t e;
         rc = loadid_est_config_default((loadid_method_t)cfg->methods[m], p->n_params, &e);
@@ -265,6 +282,9 @@ void loadid_pipeline_destroy(loadid_pipeline_t *p) {
     loadid_jr3_decoder_destroy(p->jr3);
     loadid_kin_destroy(p->kin);
     loadid_refined_destroy(p->refined);
+    loadid_spectrum_rows_destroy(p->rows);
+    free(p->bands);
+    free(p->refined_bands);
     free(p);
 }
 
@@ -359,6 +379,23 @@ static void fill_estimate(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
     }
 }
 
+/* Method m's std at phi (16 values) and residual scale: by band of
+ * frequency from the window's rows (REFINED's own), else with one level
+ * per row group (loadid_est_uncertainty_spectral). */
+static int uncertainty_of(const loadid_pipeline_t *p, int m, const loadid_real_t *phi,
+                          loadid_real_t *std, loadid_real_t *scale) {
+    const int refined = m == p->refined_m;
+    const loadid_spectrum_rows_t *rows = refined         ? loadid_refined_rows(p->refined)
+                                         : p->rows_ready ? p->rows
+                                                         : NULL;
+    loadid_spectrum_t *sp = refined ? p->refined_bands : p->bands;
+    if (rows &&
+        loadid_spectrum_rows_bands(rows, loadid_est_config(p->est[m])->row_sigma, sp) == 0 &&
+        loadid_est_uncertainty_spectral(p->est[m], phi, sp, std, scale) == 0)
+        return 0;
+    return loadid_est_uncertainty(p->est[m], phi, std, scale);
+}
+
 /* Method m's final phi and its std (16 values) and residual scale, the
  * offset's drift taken out of the wrench: with the offset estimated always
  * (the estimator fits it, loadid_est_drift_fitted), with zeroing when the
@@ -380,7 +417,7 @@ static void final_phi(const loadid_pipeline_t *p, int m, loadid_real_t *phi, loa
         if (p->cfg.methods[m] == LOADID_METHOD_RIV) pull = p->drift_iv_pull;
         for (int i = 0; i < 10; ++i) phi[i] -= (loadid_real_t)pull[i];
     }
-    if (loadid_est_uncertainty(p->est[m], phi, std, scale) != 0)
+    if (uncertainty_of(p, m, phi, std, scale) != 0)
         for (int i = 0; i < 16; ++i) std[i] = (loadid_real_t)INFINITY;
     const double *extra = NULL; /* what fitting the drift costs */
     if (zeroed_drift)
@@ -687,6 +724,7 @@ static void finish_estimation(loadid_pipeline_t *p, int64_t utime, int by_stop) 
     if (!p->complete) note(p, "incomplete: %s", p->incomplete_reason);
     check_drift(p);
     if (p->refined_m >= 0) run_refined(p);
+    p->rows_ready = loadid_spectrum_rows_transform(p->rows) == 0;
     set_state(p, utime, LOADID_STATE_DONE, "");
     publish_all(p, 1);
     choose_primary(p);
@@ -923,6 +961,8 @@ static void reset_run(loadid_pipeline_t *p) {
     p->primary = -1;
     p->refined_ran = 0;
     p->drift_significant = 0;
+    loadid_spectrum_rows_reset(p->rows);
+    p->rows_ready = 0;
     if (p->refined) loadid_refined_start(p->refined);
 }
 
@@ -1234,6 +1274,7 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
         if (have_c) loadid_drift_check_add_instruments(&p->drift, s->t_us, A, C);
     }
     if (p->refined) loadid_refined_sample(p->refined, s->t_us, y, lin, ang);
+    loadid_spectrum_rows_add(p->rows, s->t_us, A, have_c ? C : NULL, y);
     for (int m = 0; m < p->num_methods; ++m) {
         const int is_riv = p->cfg.methods[m] == LOADID_METHOD_RIV;
         if ((is_riv && !have_c) || m == p->refined_m) continue;

@@ -2,6 +2,7 @@
 #include "loadid/refined.h"
 
 #include "spd.h"
+#include "spectrum_rows.h"
 
 #include <errno.h>
 #include <math.h>
@@ -33,6 +34,8 @@ struct loadid_refined {
     unsigned char *kin_ok;
     loadid_real_t *best_kin, *best_q[3]; /* the best trial's, swapped with the above */
     unsigned char *best_ok;
+    loadid_spectrum_rows_t *rows; /* the rows fed to the estimator (phi_std by band) */
+    int rows_ready;
     /* run-time work, linear in time order */
     int64_t *t_lin;
     loadid_real_t *q_lin, *work, *qs, *qds, *qdds; /* qs..: jcap x n_joints */
@@ -71,6 +74,8 @@ int loadid_refined_create(const loadid_config_t *cfg, const loadid_chain_t *chai
     r->qds = malloc(nj * sizeof *r->qds);
     r->qdds = malloc(nj * sizeof *r->qdds);
     for (int i = 0; i < 3; ++i) r->best_q[i] = malloc(nj * sizeof *r->best_q[i]);
+    rc = loadid_spectrum_rows_create(
+        r->scap, cfg->offset_model_estimate ? LOADID_NPHI_OFFSET : LOADID_NPHI, 0, &r->rows);
     if (rc == 0 && !(r->jt && r->jq && r->s && r->kin_store && r->kin_ok && r->best_kin &&
                      r->best_ok && r->best_q[0] && r->best_q[1] && r->best_q[2] && r->t_lin &&
                      r->q_lin && r->work && r->qs && r->qds && r->qdds))
@@ -100,6 +105,7 @@ void loadid_refined_destroy(loadid_refined_t *r) {
     free(r->qs);
     free(r->qds);
     free(r->qdds);
+    loadid_spectrum_rows_destroy(r->rows);
     free(r);
 }
 
@@ -120,6 +126,11 @@ void loadid_refined_joint(loadid_refined_t *r, int64_t t_us, const loadid_real_t
 void loadid_refined_start(loadid_refined_t *r) {
     r->scount = 0;
     r->dropped = 0;
+    r->rows_ready = 0;
+}
+
+const loadid_spectrum_rows_t *loadid_refined_rows(const loadid_refined_t *r) {
+    return r && r->rows_ready ? r->rows : NULL;
 }
 
 void loadid_refined_sample(loadid_refined_t *r, int64_t t_us, const loadid_real_t y[6],
@@ -190,7 +201,7 @@ static int weigh(loadid_est_t *est, const loadid_noise_levels_t *lv, double omeg
 }
 
 /* Feeds every sample with kinematics to est; returns the samples fed. */
-static int64_t feed(const loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
+static int64_t feed(loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
                     const double drift[6], int64_t t_mid, loadid_est_t *est) {
     int64_t fed = 0;
     for (int i = 0; i < r->scount; ++i) {
@@ -201,7 +212,10 @@ static int64_t feed(const loadid_refined_t *r, int n_params, const loadid_real_t
         const double dt = (double)(r->s[i].t - t_mid) * 1e-6;
         for (int row = 0; row < 6; ++row)
             y[row] = (loadid_real_t)((double)r->s[i].y[row] - drift[row] * dt);
-        if (loadid_est_update(est, A, NULL, y) == 0) fed++;
+        if (loadid_est_update(est, A, NULL, y) == 0) {
+            loadid_spectrum_rows_add(r->rows, r->s[i].t, A, NULL, y);
+            fed++;
+        }
     }
     return fed;
 }
@@ -618,6 +632,8 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     if (!rep->drift_fitted) memset(rep->drift, 0, sizeof rep->drift);
     /* Without a drift the reference time is unused (drift 0; INT64_MIN
      * would overflow the difference). */
+    loadid_spectrum_rows_reset(r->rows);
     rep->samples = feed(r, n_params, zero_a, rep->drift, rep->drift_fitted ? t_ref : 0, est);
+    r->rows_ready = loadid_spectrum_rows_transform(r->rows) == 0;
     return rep->samples > 1 ? 0 : LOADID_E_NOT_EXCITED;
 }
