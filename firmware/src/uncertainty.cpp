@@ -209,10 +209,7 @@ Md drift_share(const CovInput &in, const Problem &q) {
 
 // A full matrix from a column-major block of n x n values.
 Md full(const double *m, int n) {
-    Md out(n, n);
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) out(i, j) = m[j * n + i];
-    return out;
+    return Eigen::Map<const Eigen::MatrixXd>(m, n, n);
 }
 
 // The sandwich's meat from the residual's level per band of frequency
