@@ -278,12 +278,6 @@ extern "C" int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real
     return rc;
 }
 
-static bool all_finite_d(const double *x, int n) {
-    for (int i = 0; i < n; ++i)
-        if (!std::isfinite(x[i])) return false;
-    return true;
-}
-
 // A spectrum that fits the estimator: its samples, ordered bins, band 0
 // the mean alone, RIV's instruments' bands.
 static int spectrum_fits(const loadid::CovInput &in, const loadid_spectrum_t &sp) {
@@ -297,10 +291,10 @@ static int spectrum_fits(const loadid::CovInput &in, const loadid_spectrum_t &sp
     const bool iv = in.kind == loadid::CovKind::IV;
     for (int g = 0; g < 2; ++g) {
         for (int b = 0; b < sp.n_bands; ++b) {
-            if (!all_finite_d(sp.gram[b][g], n1 * n1)) return LOADID_E_NONFINITE;
-            if (iv && !all_finite_d(sp.iv_gram[b][g], n * n)) return LOADID_E_NONFINITE;
+            if (!all_finite(sp.gram[b][g], n1 * n1)) return LOADID_E_NONFINITE;
+            if (iv && !all_finite(sp.iv_gram[b][g], n * n)) return LOADID_E_NONFINITE;
         }
-        if (iv && !all_finite_d(sp.iv_total[g], n * n)) return LOADID_E_NONFINITE;
+        if (iv && !all_finite(sp.iv_total[g], n * n)) return LOADID_E_NONFINITE;
     }
     return 0;
 }

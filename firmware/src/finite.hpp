@@ -8,7 +8,8 @@
 
 namespace loadid {
 
-inline bool all_finite(const loadid_real_t *v, int n) {
+template <typename T>
+inline bool all_finite(const T *v, int n) {
     for (int i = 0; i < n; ++i) {
         if (!std::isfinite(v[i])) return false;
     }

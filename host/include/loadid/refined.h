@@ -93,8 +93,9 @@ void loadid_refined_joint(loadid_refined_t *r, int64_t t_us, const loadid_real_t
 /* START: forget the window's samples. */
 void loadid_refined_start(loadid_refined_t *r);
 
-/* The rows the last run fed its estimator, transformed for phi_std by
- * band of frequency (spectrum_rows.h); NULL before a run or when too few. */
+/* The rows the last run fed its estimator, for phi_std by band of
+ * frequency (spectrum_rows.h): transformed when the run had enough
+ * (loadid_spectrum_rows_bands refuses them otherwise). */
 struct loadid_spectrum_rows;
 const struct loadid_spectrum_rows *loadid_refined_rows(const loadid_refined_t *r);
 /* A usable sample of the window: y the (zeroed) wrench, lin and ang the

@@ -104,7 +104,6 @@ struct loadid_pipeline {
      * DONE for phi_std by band (spectrum_rows.h); the bands of one method
      * at a time (REFINED's apart: its job runs beside the loop) */
     loadid_spectrum_rows_t *rows;
-    int rows_ready;
     loadid_spectrum_t *bands, *refined_bands;
     /* estimation */
     int64_t est_end_us, last_sample_us, since_publish;
@@ -226,11 +225,13 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
         what = "the joint filter's noise";
     }
     p->num_methods = cfg->num_methods;
-    int instruments = 0;
-    for (int m = 0; m < p->num_methods; ++m) instruments |= cfg->methods[m] == LOADID_METHOD_RIV;
+    for (int m = 0; m < p->num_methods; ++m) {
+        p->latest[m].method = cfg->methods[m];
+        p->has_riv |= cfg->methods[m] == LOADID_METHOD_RIV;
+    }
     if (rc == 0) {
         rc = loadid_spectrum_rows_create((int)ceil(cfg->duration_s * 2000) + 100, p->n_params,
-                                         instruments, &p->rows);
+                                         p->has_riv, &p->rows);
         p->bands = malloc(sizeof *p->bands);
         p->refined_bands = malloc(sizeof *p->refined_bands);
         if (rc == 0 && !(p->bands && p->refined_bands)) rc = -ENOMEM;
@@ -255,10 +256,6 @@ int loadid_pipeline_create(const loadid_config_t *cfg, const loadid_chain_t *cha
         snprintf(err, errlen, "cannot create %s: %s", what, loadid_strerror(rc));
         loadid_pipeline_destroy(p);
         return rc;
-    }
-    for (int m = 0; m < p->num_methods; ++m) {
-        p->latest[m].method = cfg->methods[m];
-        p->has_riv |= cfg->methods[m] == LOADID_METHOD_RIV;
     }
     *out = p;
     return 0;
@@ -380,17 +377,15 @@ static void fill_estimate(loadid_pipeline_t *p, int m, const loadid_real_t *phi,
 }
 
 /* Method m's std at phi (16 values) and residual scale: by band of
- * frequency from the window's rows (REFINED's own), else with one level
- * per row group (loadid_est_uncertainty_spectral). */
+ * frequency from the window's rows (REFINED's own;
+ * loadid_est_uncertainty_spectral), else, when the rows are not
+ * transformed or do not fit the estimator, with one level per row group. */
 static int uncertainty_of(const loadid_pipeline_t *p, int m, const loadid_real_t *phi,
                           loadid_real_t *std, loadid_real_t *scale) {
     const int refined = m == p->refined_m;
-    const loadid_spectrum_rows_t *rows = refined         ? loadid_refined_rows(p->refined)
-                                         : p->rows_ready ? p->rows
-                                                         : NULL;
+    const loadid_spectrum_rows_t *rows = refined ? loadid_refined_rows(p->refined) : p->rows;
     loadid_spectrum_t *sp = refined ? p->refined_bands : p->bands;
-    if (rows &&
-        loadid_spectrum_rows_bands(rows, loadid_est_config(p->est[m])->row_sigma, sp) == 0 &&
+    if (loadid_spectrum_rows_bands(rows, loadid_est_config(p->est[m])->row_sigma, sp) == 0 &&
         loadid_est_uncertainty_spectral(p->est[m], phi, sp, std, scale) == 0)
         return 0;
     return loadid_est_uncertainty(p->est[m], phi, std, scale);
@@ -724,7 +719,7 @@ static void finish_estimation(loadid_pipeline_t *p, int64_t utime, int by_stop) 
     if (!p->complete) note(p, "incomplete: %s", p->incomplete_reason);
     check_drift(p);
     if (p->refined_m >= 0) run_refined(p);
-    p->rows_ready = loadid_spectrum_rows_transform(p->rows) == 0;
+    loadid_spectrum_rows_transform(p->rows); /* else phi_std has one level per row group */
     set_state(p, utime, LOADID_STATE_DONE, "");
     publish_all(p, 1);
     choose_primary(p);
@@ -962,7 +957,6 @@ static void reset_run(loadid_pipeline_t *p) {
     p->refined_ran = 0;
     p->drift_significant = 0;
     loadid_spectrum_rows_reset(p->rows);
-    p->rows_ready = 0;
     if (p->refined) loadid_refined_start(p->refined);
 }
 

@@ -35,7 +35,6 @@ struct loadid_refined {
     loadid_real_t *best_kin, *best_q[3]; /* the best trial's, swapped with the above */
     unsigned char *best_ok;
     loadid_spectrum_rows_t *rows; /* the rows fed to the estimator (phi_std by band) */
-    int rows_ready;
     /* run-time work, linear in time order */
     int64_t *t_lin;
     loadid_real_t *q_lin, *work, *qs, *qds, *qdds; /* qs..: jcap x n_joints */
@@ -126,11 +125,11 @@ void loadid_refined_joint(loadid_refined_t *r, int64_t t_us, const loadid_real_t
 void loadid_refined_start(loadid_refined_t *r) {
     r->scount = 0;
     r->dropped = 0;
-    r->rows_ready = 0;
+    loadid_spectrum_rows_reset(r->rows);
 }
 
 const loadid_spectrum_rows_t *loadid_refined_rows(const loadid_refined_t *r) {
-    return r && r->rows_ready ? r->rows : NULL;
+    return r ? r->rows : NULL;
 }
 
 void loadid_refined_sample(loadid_refined_t *r, int64_t t_us, const loadid_real_t y[6],
@@ -634,6 +633,6 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
      * would overflow the difference). */
     loadid_spectrum_rows_reset(r->rows);
     rep->samples = feed(r, n_params, zero_a, rep->drift, rep->drift_fitted ? t_ref : 0, est);
-    r->rows_ready = loadid_spectrum_rows_transform(r->rows) == 0;
+    loadid_spectrum_rows_transform(r->rows); /* else phi_std has one level per row group */
     return rep->samples > 1 ? 0 : LOADID_E_NOT_EXCITED;
 }
