@@ -26,8 +26,10 @@ a loop the kernel did not run for that long; --verbose as with a stall.
 
 from __future__ import annotations
 
+import atexit
 import json
 import os
+import shutil
 import signal
 import socket
 import subprocess
@@ -48,7 +50,9 @@ def main():
     got = out.got
 
     # systemd's side of Type=notify: a datagram socket in NOTIFY_SOCKET.
-    notify_path = os.path.join(tempfile.mkdtemp(), "notify")
+    notify_dir = tempfile.mkdtemp(prefix="loadid-notify-")
+    atexit.register(shutil.rmtree, notify_dir, True)
+    notify_path = os.path.join(notify_dir, "notify")
     notify = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
     notify.bind(notify_path)
     notify.setblocking(False)
