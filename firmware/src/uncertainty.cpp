@@ -58,23 +58,72 @@ Md offset_share(const CovInput &in, const Vd &t, const Md &inv) {
     return jac * cov0 * jac.transpose();
 }
 
-// b b^T, b = h^-1 C phi: what the noise of the columns taken as exact may
-// pull the estimate by (uncertainty.hpp). h: sum A^T W A (n x n, without
-// the column weights).
-Md attenuation_share(const CovInput &in, const Vd &t, const Vd &phi, const Md &h) {
+// b b^T, the bias the columns' noise may leave in phi (uncertainty.hpp).
+// h: sum A^T W A (n x n, without the column weights). Columns counted
+// exact (a joint filter's) pull by h^-1 C phi. For least squares
+// (least_squares) the noisy ones too: their error is a measurement's, so
+// E[h] = H0 + C and phi_LS = (H0 + C)^-1 H0 phi, i.e. phi - phi_LS =
+// (h - C)^-1 C phi_LS. The column weights give C in units of the row
+// weights, so it is scaled by the measured wrench noise in those units
+// (noise_sigma, the larger row group's); without that measurement the
+// weights may be defaults, not noise levels, and no such bias is counted.
+// Not finite when h - C is not positive definite: the columns' noise is
+// all their signal in some direction.
+Md attenuation_share(const CovInput &in, const Vd &t, const Vd &phi, const Md &h,
+                     bool least_squares) {
     const int n = static_cast<int>(h.rows());
-    Vd c = Vd::Zero(n);
     if (!in.col_exact) return Md::Zero(n, n);
+    double kappa = 0;
+    if (in.noise_sigma && in.row_weight)
+        for (int grp = 0; grp < 2; ++grp) {
+            const double d = static_cast<double>(in.noise_sigma[grp]) *
+                             static_cast<double>(in.row_weight[3 * grp]);
+            if (d > 0 && std::isfinite(d)) kappa = std::max(kappa, d * d);
+        }
+    least_squares = least_squares && kappa > 0;
+    Vd c = Vd::Zero(n), noisy = Vd::Zero(n);
+    const double rows = 6.0 * static_cast<double>(in.samples);
     for (int j = 0; j < std::min(n, LOADID_NPHI); ++j) { // the offset columns are exact
         const double exact = static_cast<double>(in.col_exact[j]);
-        if (exact == 1.0) continue;
-        const double t_noise = t(j) / exact;
-        c(j) = 6.0 * static_cast<double>(in.samples) / (t_noise * t_noise);
+        if (exact != 1.0) {
+            const double t_noise = t(j) / exact;
+            c(j) = rows / (t_noise * t_noise);
+        } else if (least_squares) {
+            noisy(j) = kappa * rows / (t(j) * t(j));
+        }
     }
-    if (!(c.maxCoeff() > 0)) return Md::Zero(n, n);
-    const Vd b = h.ldlt().solve(c.cwiseProduct(phi));
+    if (!(c.maxCoeff() > 0) && !(noisy.maxCoeff() > 0)) return Md::Zero(n, n);
+    Vd b;
+    if (noisy.maxCoeff() > 0) {
+        Md hc = h;
+        hc.diagonal() -= noisy;
+        Md hci;
+        if (!spd_inverse(hc, hci))
+            return Md::Constant(n, n, std::numeric_limits<double>::quiet_NaN());
+        b = hci * (c + noisy).cwiseProduct(phi);
+    } else {
+        b = h.ldlt().solve(c.cwiseProduct(phi));
+    }
     if (!b.allFinite()) return Md::Zero(n, n);
     return b * b.transpose();
+}
+
+// d d^T delta^2: TLS takes the columns' noise share K = lmin T^-2 off the
+// Gram (Van Huffel & Vandewalle 1991), so its estimate moves by
+// d = (h - K)^-1 K phi per unit of relative error in that share; its
+// relative error is taken as |1 - s^2|, s TLS's own misfit (1 when the row
+// and column weights fit the data). With columns counted exact K is
+// nothing; with the accelerometer's columns (sensor, mixed) the share
+// corrected 24-71 % of the mass, and a vibration the weights did not
+// describe (coherent across the axes) left RTLS 8-10 % off in mass at
+// 3 % phi_std.
+Md weights_share(const Vd &t, const Vd &phi, const Md &hi, double lmin, int noisy_to, double s2) {
+    const int n = static_cast<int>(hi.rows());
+    Vd k = Vd::Zero(n);
+    for (int j = 0; j < noisy_to; ++j) k(j) = lmin / (t(j) * t(j)) * phi(j);
+    const Vd d = hi * k;
+    const double delta = 1 - s2;
+    return delta * delta * d * d.transpose();
 }
 
 // What covariance_std works on: the weighted Gram of [A y] with column
@@ -321,6 +370,7 @@ int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) 
             cov = mi * meat * mi.transpose();
     } else {
         Md h = g.topLeftCorner(n, n);
+        double lmin = 0;
         if (in.kind == CovKind::TLS) {
             // A0^T W A0 of the noise-free data: the noise's share, the
             // smallest eigenvalue of the scaled Gram per unit column weight,
@@ -337,7 +387,7 @@ int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) 
                 noisy = s - x.transpose() * Md(gs.block(k, k, ne, ne)).ldlt().solve(x);
             }
             Eigen::SelfAdjointEigenSolver<Md> es(noisy, Eigen::EigenvaluesOnly);
-            const double lmin = std::max(es.eigenvalues()(0), 0.0);
+            lmin = std::max(es.eigenvalues()(0), 0.0);
             h.diagonal().head(p.exact_from).array() -=
                 lmin * t.head(p.exact_from).array().square().inverse();
             // TLS's own scale: the orthogonal residual per entry of the
@@ -348,11 +398,10 @@ int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) 
         if (!spd_inverse(h, hi)) return LOADID_E_NOT_EXCITED;
         const Md meat =
             spectral ? smeat : Md(sf2 * gf.topLeftCorner(n, n) + st2 * gt.topLeftCorner(n, n));
-        if (p.witness)
-            cov = hi * meat * hi + offset_share(in, t, hi) +
-                  attenuation_share(in, t, phi, g.topLeftCorner(n, n)) + drift_share(in, p);
-        else
-            cov = hi * meat * hi + attenuation_share(in, t, phi, g.topLeftCorner(n, n));
+        const bool ls = in.kind != CovKind::TLS;
+        cov = hi * meat * hi + attenuation_share(in, t, phi, g.topLeftCorner(n, n), ls);
+        if (!ls) cov += weights_share(t, phi, hi, lmin, p.exact_from, s2);
+        if (p.witness) cov += offset_share(in, t, hi) + drift_share(in, p);
     }
     if (!cov.allFinite()) return LOADID_E_NOT_EXCITED;
     if (p.out.size() != 0) cov = p.out * cov * p.out.transpose();

@@ -112,7 +112,9 @@ typedef struct {
      * than their count says: loadid_est_uncertainty adds that noise's
      * variance times (1 + r) / (1 - r) - 1 to each row group's residual
      * variance (the rest of the residual, the columns' noise and misfit,
-     * as it is). Default 0, 0: no correction. */
+     * as it is). Default 0, 0: no correction. A measured noise_sigma
+     * also says the column weights are noise levels: least squares then
+     * counts the bias noisy columns (col_exact 1) leave in phi. */
     loadid_real_t noise_sigma[2];
     loadid_real_t noise_corr[2];
 } loadid_est_config_t;
