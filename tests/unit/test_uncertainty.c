@@ -603,6 +603,65 @@ static void test_ls_counts_the_bias_of_noisy_columns(void **state) {
 #endif
 }
 
+/* TLS on noisy accelerometer columns (4 times the paper's noise, so TLS
+ * removes a large share), weighted for that noise and for 1.6 times it:
+ * fitting weights leave the coverage in the band; weights that do not fit
+ * show in TLS's misfit s, and phi_std then counts what the columns' share
+ * moved phi by, times |1 - s^2|. */
+static void test_tls_counts_weights_that_do_not_fit(void **state) {
+    (void)state;
+    double z2[2][10] = {{0}}, s_mean[2] = {0}, ratio = 0;
+    int in[2][10] = {{0}};
+    for (int seed = 1; seed <= kSeeds; ++seed) {
+        dataset_spec_t spec = {.seed = (uint64_t)seed * 7919u + 19u,
+                               .n_samples = 1500,
+                               .n_params = 10,
+                               .noise = kPaperNoise};
+        spec.noise.sigma_spec *= 4;
+        dataset_t d;
+        assert_int_equal(dataset_make(&spec, &d), 0);
+        double std0[2];
+        for (int wrong = 0; wrong < 2; ++wrong) {
+            dataset_spec_t told = spec;
+            if (wrong) told.noise.sigma_spec *= 1.6;
+            loadid_est_config_t cfg;
+            dataset_config(&told, LOADID_METHOD_TLS_BATCH, &cfg);
+            loadid_est_t *est = fed(&d, &cfg);
+            loadid_real_t phi[10], std[10], scale;
+            assert_int_equal(loadid_est_estimate_unique(est, phi, NULL), 0);
+            assert_int_equal(loadid_est_uncertainty(est, phi, std, &scale), 0);
+            loadid_est_destroy(est);
+            for (int j = 0; j < 10; ++j) {
+                z2[wrong][j] += pow((phi[j] - d.truth[j]) / std[j], 2);
+                in[wrong][j] += fabs(phi[j] - d.truth[j]) <= 2 * std[j];
+            }
+            s_mean[wrong] += (double)scale / kSeeds;
+            std0[wrong] = std[0];
+        }
+        ratio += std0[1] / std0[0] / kSeeds;
+        dataset_free(&d);
+    }
+    double cmin = 1, zmin = 1e9, zmax = 0;
+    for (int j = 0; j < 10; ++j) {
+        const double z = sqrt(z2[0][j] / kSeeds);
+        cmin = fmin(cmin, (double)in[0][j] / kSeeds), zmin = fmin(zmin, z), zmax = fmax(zmax, z);
+    }
+    print_message(
+        "TLS_BATCH %d seeds, a - g noise 2 m/s^2: weights that fit: s %.2f, every "
+        "parameter covered %.2f or more, RMS error / std %.2f to %.2f; a - g weighted "
+        "as 1.6 times its noise: s %.2f, the mass's std %.1f times as wide, covered "
+        "%.2f (Izz %.2f: the weights' error is a channel's, not one scale)\n",
+        kSeeds, s_mean[0], cmin, zmin, zmax, s_mean[1], ratio, (double)in[1][0] / kSeeds,
+        (double)in[1][9] / kSeeds);
+#ifndef LOADID_SANITIZED
+    assert_true(cmin >= 0.90 && zmin >= 0.7 && zmax <= 1.3); /* fitting: nothing added */
+    assert_true(fabs(s_mean[0] - 1) < 0.05 && s_mean[1] < 0.8);
+    assert_true(ratio > 3 && in[1][0] >= 0.95 * kSeeds);
+#else
+    assert_true(ratio > 1);
+#endif
+}
+
 /* With the offset estimated and drifting (kDrift), the final estimate with
  * the drift fitted (loadid_est_drift_fitted) over kSeeds data sets: the
  * share of |phi_fitted_j - truth_j| <= 2 std_j per parameter, the offset
@@ -913,6 +972,7 @@ int main(void) {
         cmocka_unit_test(test_tls_coverage_noise_in_a),
         cmocka_unit_test(test_riv_coverage_noise_in_a),
         cmocka_unit_test(test_ls_counts_the_bias_of_noisy_columns),
+        cmocka_unit_test(test_tls_counts_weights_that_do_not_fit),
         cmocka_unit_test(test_drift_fitted_coverage),
         cmocka_unit_test(test_zeroing_noise_refused),
         cmocka_unit_test(test_offset_share_coverage),
