@@ -60,7 +60,7 @@ typedef struct {
     int64_t last_t_us;
     double d3[LOADID_NOISE_D3_RING][LOADID_NOISE_CHANNELS];
     int d3_n, d3_head;
-    double scratch[LOADID_NOISE_STILL_MAX]; /* for the medians */
+    double scratch[LOADID_NOISE_STILL_MAX], scratch2[LOADID_NOISE_STILL_MAX]; /* medians */
     /* The load moved in the still window (loadid_noise_acc_moved): its
      * statistics are then those of what a cubic in time leaves, per
      * channel (trend: the cubics' coefficients). */
@@ -100,9 +100,12 @@ void loadid_noise_acc_moving(loadid_noise_acc_t *a, int64_t t_us, int64_t period
  * Cleared by loadid_noise_acc_reset_still. */
 void loadid_noise_acc_moved(loadid_noise_acc_t *a);
 
-/* Per-channel standard deviations: the still window when it has at least
- * min_still samples, else the third differences when they have 100, else
- * 0; returns the source (LOADID_NOISE_STILL / _DIFFERENCES / _FALLBACK).
+/* Per-channel standard deviations (the root mean square of the values
+ * within 5 of their median absolute deviation's sigma: robust to bit
+ * errors, and a variance, which the weights need, for noise that is not
+ * normal): the still window when it has at least min_still samples, else
+ * the third differences when they have 100, else 0; returns the source
+ * (LOADID_NOISE_STILL / _DIFFERENCES / _FALLBACK).
  * Uses a's scratch space. */
 int loadid_noise_acc_sigma(loadid_noise_acc_t *a, int min_still,
                            double sigma[LOADID_NOISE_CHANNELS]);
