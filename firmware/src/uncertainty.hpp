@@ -48,7 +48,7 @@
 // |1 - s^2| (s TLS's own misfit): delta^2 d d^T is added. With the
 // accelerometer's columns and a vibration coherent across its axes, which
 // the diagonal weights do not describe, RTLS claimed a mass 8-10 % off in
-// 29 of 54 claims, now 3 of 4. One scale for what is a channel's error
+// 29 of 54 claims, now 3 of 15. One scale for what is a channel's error
 // is a first-order remedy: the accelerometer weighted as 1.6 times its
 // noise (test_uncertainty) left Izz covered in 15 % of the draws, now 79 %.
 // A misfit of the motion model puts the residual's power at tens of Hz
