@@ -984,6 +984,18 @@ static void apply_measured_noise(loadid_pipeline_t *p) {
             loadid_est_set_weights(p->est[m], e.row_sigma, e.col_weight) == 0)
             loadid_est_set_exact(p->est[m], e.col_exact);
     }
+    /* With the offset estimated no zeroing window sets the wrench noise
+     * measured apart (set_zeroing_noise); the channels' levels are that
+     * noise all the same, for phi_std's floor and the bias noisy columns
+     * leave in least squares (loadid_est_config_t's noise_sigma). */
+    if (p->n_params == LOADID_NPHI_OFFSET && src != LOADID_NOISE_FALLBACK) {
+        double v[2] = {0, 0};
+        for (int i = 0; i < 6; ++i) v[i / 3] += channel[i] * channel[i] / 3;
+        const loadid_real_t sigma[2] = {(loadid_real_t)sqrt(v[0]), (loadid_real_t)sqrt(v[1])},
+                            r[2] = {0, 0};
+        for (int m = 0; m < p->num_methods; ++m)
+            if (m != p->refined_m) loadid_est_set_noise_corr(p->est[m], sigma, r);
+    }
     /* A configured level the data contradict (by more than 2 either way)
      * is still used, as configured, but said: weights off by a factor
      * cost RTLS up to 20 % of the mass in the study's wrong3x cells. */
