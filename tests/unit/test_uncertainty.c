@@ -94,6 +94,16 @@ static void fit(const dataset_t *d, const loadid_est_config_t *cfg, loadid_real_
     loadid_est_destroy(est);
 }
 
+/* fit, with the estimate without the noise-ratio test (the pipeline's
+ * final one where the solution is unique: least squares always). */
+static void fit_unique(const dataset_t *d, const loadid_est_config_t *cfg, loadid_real_t *phi,
+                       loadid_real_t *std, loadid_real_t *scale) {
+    loadid_est_t *est = fed(d, cfg);
+    assert_int_equal(loadid_est_estimate_unique(est, phi, NULL), 0);
+    assert_int_equal(loadid_est_uncertainty(est, phi, std, scale), 0);
+    loadid_est_destroy(est);
+}
+
 /* fit's (the estimate without the noise-ratio test, as the pipeline's
  * final one may be), and loadid_est_drift_fitted's phi_fitted and std (16
  * values). */
@@ -565,13 +575,8 @@ static void test_ls_counts_the_bias_of_noisy_columns(void **state) {
             if (told)
                 cfg.noise_sigma[0] = (loadid_real_t)noise.sigma_f,
                 cfg.noise_sigma[1] = (loadid_real_t)noise.sigma_tau;
-            /* The noise-ratio gate refuses such data; LS's solution is
-             * unique all the same (the pipeline's final estimate). */
-            loadid_est_t *est = fed(&d, &cfg);
-            loadid_real_t phi[10], std[10], scale;
-            assert_int_equal(loadid_est_estimate_unique(est, phi, NULL), 0);
-            assert_int_equal(loadid_est_uncertainty(est, phi, std, &scale), 0);
-            loadid_est_destroy(est);
+            loadid_real_t phi[10], std[10], scale; /* the noise-ratio gate refuses such data */
+            fit_unique(&d, &cfg, phi, std, &scale);
             for (int j = 0; j < 10; ++j) z2[told][j] += pow((phi[j] - d.truth[j]) / std[j], 2);
             in[told] += fabs(phi[0] - d.truth[0]) <= 2 * std[0];
             for (int j = 0; told && j < 10; ++j)
@@ -626,11 +631,8 @@ static void test_tls_counts_weights_that_do_not_fit(void **state) {
             if (wrong) told.noise.sigma_spec *= 1.6;
             loadid_est_config_t cfg;
             dataset_config(&told, LOADID_METHOD_TLS_BATCH, &cfg);
-            loadid_est_t *est = fed(&d, &cfg);
             loadid_real_t phi[10], std[10], scale;
-            assert_int_equal(loadid_est_estimate_unique(est, phi, NULL), 0);
-            assert_int_equal(loadid_est_uncertainty(est, phi, std, &scale), 0);
-            loadid_est_destroy(est);
+            fit_unique(&d, &cfg, phi, std, &scale);
             for (int j = 0; j < 10; ++j) {
                 z2[wrong][j] += pow((phi[j] - d.truth[j]) / std[j], 2);
                 in[wrong][j] += fabs(phi[j] - d.truth[j]) <= 2 * std[j];
