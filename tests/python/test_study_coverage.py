@@ -2,7 +2,8 @@
 the Wilson interval against published values and its defining equation, the
 simulator seeds (one random stream per recording, so that pooled runs are
 independent draws), and the pooled table's counting (a recording two cells
-share counts once; the verdicts against the 90-98 % band). Also the
+share counts once; the verdicts against the 90-98 % band), the claims
+table's counting (identified groups, the wrong ones). Also the
 program's own --self-test (geometry, regressor, smoother, TLS, JR3 frames)."""
 
 from __future__ import annotations
@@ -139,3 +140,29 @@ def test_rigid_cells_simulate_their_own_recordings_without_backlash():
         assert st.sim_key(cell) != st.sim_key(base)
         assert simulation(cell).replace("  backlash: 0.0\n", "") == simulation(base)
     assert st.sim_key("wrong3x") == st.sim_key("paper")
+
+
+def test_claims_count_the_identified_groups_and_the_wrong_ones():
+    """claims(): per noise cell and method, the runs that identify a group
+    and, of those, the ones whose load model misses it beyond CLAIM_WRONG
+    (counted here by hand); a failed run and another method's row do not
+    count, a claim without the model's error counts as wrong."""
+    def row(noise, method, ident, mass, com, inertia, ok=True):
+        return dict(noise=noise, method=method, ok=ok, identified="+".join(ident),
+                    model_mass_pct=mass, model_com_mm=com, model_inertia_pct=inertia)
+    rows = [row("paper", "RLS", ["mass", "com"], 1.0, 3.0, 50.0),        # both right
+            row("paper", "RLS", ["mass"], 7.0, 30.0, 10.0),               # mass wrong
+            row("paper", "RLS", ["mass", "com", "inertia"], 4.9, 15.1, 29.0),  # com wrong
+            row("paper", "RLS", ["inertia"], 1.0, 1.0, ""),               # no model: wrong
+            row("paper", "RLS", ["mass"], 90.0, 0.0, 0.0, ok=False),      # no estimate
+            row("paper", "RTLS", ["mass"], 90.0, 0.0, 0.0),               # another method
+            row("high", "RLS", [], 90.0, 90.0, 90.0)]                     # claims nothing
+    c = st.claims(rows, ["RLS", "RTLS"], ["paper", "high"])
+    assert c["paper"]["RLS"] == dict(runs=4, mass=dict(claimed=3, wrong=1),
+                                     com=dict(claimed=2, wrong=1),
+                                     inertia=dict(claimed=2, wrong=1))
+    assert c["paper"]["RTLS"]["mass"] == dict(claimed=1, wrong=1)
+    assert c["high"]["RLS"] == dict(runs=1, mass=dict(claimed=0, wrong=0),
+                                    com=dict(claimed=0, wrong=0), inertia=dict(claimed=0, wrong=0))
+    text = st.claims_table(c)
+    assert "1/3" in text and "0/0" in text
