@@ -38,6 +38,15 @@ bool spd_inverse(const Md &S, Md &inv) {
     return true;
 }
 
+// The wrench noise measured apart, row group grp's, in units of the row
+// weights D (1 when the weights are that noise); 0 without a measurement.
+double measured_noise(const CovInput &in, int grp) {
+    if (!in.noise_sigma || !in.row_weight) return 0;
+    const double d =
+        static_cast<double>(in.noise_sigma[grp]) * static_cast<double>(in.row_weight[3 * grp]);
+    return d > 0 && std::isfinite(d) ? d : 0;
+}
+
 // J Sigma_y0 J^T, J = inv sum_k A_k^T W: the estimate's covariance from the
 // zeroing offset's error (uncertainty.hpp); zero without one.
 Md offset_share(const CovInput &in, const Vd &t, const Md &inv) {
@@ -73,13 +82,7 @@ Md attenuation_share(const CovInput &in, const Vd &t, const Vd &phi, const Md &h
                      bool least_squares) {
     const int n = static_cast<int>(h.rows());
     if (!in.col_exact) return Md::Zero(n, n);
-    double kappa = 0;
-    if (in.noise_sigma && in.row_weight)
-        for (int grp = 0; grp < 2; ++grp) {
-            const double d = static_cast<double>(in.noise_sigma[grp]) *
-                             static_cast<double>(in.row_weight[3 * grp]);
-            if (d > 0 && std::isfinite(d)) kappa = std::max(kappa, d * d);
-        }
+    const double kappa = std::pow(std::max(measured_noise(in, 0), measured_noise(in, 1)), 2);
     least_squares = least_squares && kappa > 0;
     Vd c = Vd::Zero(n), noisy = Vd::Zero(n);
     const double rows = 6.0 * static_cast<double>(in.samples);
@@ -93,17 +96,12 @@ Md attenuation_share(const CovInput &in, const Vd &t, const Vd &phi, const Md &h
         }
     }
     if (!(c.maxCoeff() > 0) && !(noisy.maxCoeff() > 0)) return Md::Zero(n, n);
-    Vd b;
-    if (noisy.maxCoeff() > 0) {
-        Md hc = h;
-        hc.diagonal() -= noisy;
-        Md hci;
-        if (!spd_inverse(hc, hci))
-            return Md::Constant(n, n, std::numeric_limits<double>::quiet_NaN());
-        b = hci * (c + noisy).cwiseProduct(phi);
-    } else {
-        b = h.ldlt().solve(c.cwiseProduct(phi));
-    }
+    Md hc = h;
+    hc.diagonal() -= noisy;
+    const Eigen::LDLT<Md> f(hc);
+    if (noisy.maxCoeff() > 0 && !(f.info() == Eigen::Success && (f.vectorD().array() > 0).all()))
+        return Md::Constant(n, n, std::numeric_limits<double>::quiet_NaN());
+    const Vd b = f.solve((c + noisy).cwiseProduct(phi));
     if (!b.allFinite()) return Md::Zero(n, n);
     return b * b.transpose();
 }
@@ -279,11 +277,7 @@ bool spectral_meat(const CovInput &in, const Problem &p, const Md &gf, const Md 
     if (!spd_inverse(Md((gf + gt).topLeftCorner(n, n)), hi)) return false;
     meat = Md::Zero(n, n);
     for (int grp = 0; grp < 2; ++grp) {
-        double floor = 0;
-        if (in.noise_sigma && in.row_weight)
-            floor = std::pow(static_cast<double>(in.noise_sigma[grp]) *
-                                 static_cast<double>(in.row_weight[3 * grp]),
-                             2);
+        const double floor = std::pow(measured_noise(in, grp), 2);
         Md rest = grp == 0 ? gf : gt, rest_iv;
         if (iv) rest_iv = full(sp->iv_total[grp], n);
         Md pend = Md::Zero(n1, n1), pend_iv = Md::Zero(n, n);
@@ -346,13 +340,11 @@ int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) 
     double sf2 = std::max(v.dot(gf * v), 0.0) / half;
     double st2 = std::max(v.dot(gt * v), 0.0) / half;
     double s2 = (sf2 + st2) / 2; // the scale reported: of the residual itself
-    if (in.noise_corr && in.noise_sigma && in.row_weight) {
+    if (in.noise_corr) {
         double *group[2] = {&sf2, &st2};
         for (int k = 0; k < 2; ++k) {
             const double r = static_cast<double>(in.noise_corr[k]);
-            const double w = static_cast<double>(in.noise_sigma[k]) *
-                             static_cast<double>(in.row_weight[3 * k]); // in units of D
-            *group[k] += w * w * ((1 + r) / (1 - r) - 1);
+            *group[k] += std::pow(measured_noise(in, k), 2) * ((1 + r) / (1 - r) - 1);
         }
     }
     const double s2_iv = (sf2 + st2) / 2;

@@ -128,6 +128,9 @@ int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double 
 int loadid_noise_joint_levels(const loadid_kin_t *kin, const loadid_real_t *q, double sigma_qd,
                               double sigma_qdd, double *spec, double *alpha, double *omega);
 
+/* The root mean square of three channels' levels (a group's level). */
+double loadid_noise_rms3(const double v[3]);
+
 /* Combines the configuration's overrides, the measured channels and the
  * joint levels for a signal source into the estimators' levels.
  * jr3_spec / jr3_alpha: the source takes a - g / alpha from the sensor's

@@ -231,8 +231,7 @@ int loadid_noise_joint_levels(const loadid_kin_t *kin, const loadid_real_t *q, d
     return 0;
 }
 
-/* RMS of three channels' levels. */
-static double rms3(const double *v) {
+double loadid_noise_rms3(const double v[3]) {
     return sqrt((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) / 3.0);
 }
 
@@ -265,16 +264,16 @@ void loadid_noise_combine(const loadid_config_t *cfg, int jr3_spec, int jr3_alph
     out->joint_alpha = joint_alpha;
     out->joint_omega = joint_omega;
     const int js = joint_spec > 0 ? LOADID_NOISE_FILTER : LOADID_NOISE_FALLBACK;
-    out->force = pick(g & LOADID_NOISE_GIVEN_FORCE, cfg->noise_force, rms3(channel), channel_source,
-                      &out->source[0]);
-    out->torque = pick(g & LOADID_NOISE_GIVEN_TORQUE, cfg->noise_torque, rms3(channel + 3),
-                       channel_source, &out->source[1]);
-    out->spec = jr3_spec ? pick(g & LOADID_NOISE_GIVEN_LINEAR, cfg->noise_linear, rms3(channel + 6),
-                                channel_source, &out->source[2])
+    out->force = pick(g & LOADID_NOISE_GIVEN_FORCE, cfg->noise_force, loadid_noise_rms3(channel),
+                      channel_source, &out->source[0]);
+    out->torque = pick(g & LOADID_NOISE_GIVEN_TORQUE, cfg->noise_torque,
+                       loadid_noise_rms3(channel + 3), channel_source, &out->source[1]);
+    out->spec = jr3_spec ? pick(g & LOADID_NOISE_GIVEN_LINEAR, cfg->noise_linear,
+                                loadid_noise_rms3(channel + 6), channel_source, &out->source[2])
                          : pick(g & LOADID_NOISE_GIVEN_KF_SPEC, cfg->kalman_spec_sigma, joint_spec,
                                 js, &out->source[2]);
     out->alpha = jr3_alpha ? pick(g & LOADID_NOISE_GIVEN_ANGULAR, cfg->noise_angular,
-                                  rms3(channel + 9), channel_source, &out->source[3])
+                                  loadid_noise_rms3(channel + 9), channel_source, &out->source[3])
                            : pick(g & LOADID_NOISE_GIVEN_KF_ALPHA, cfg->kalman_alpha_sigma,
                                   joint_alpha, js, &out->source[3]);
     out->omega =

@@ -989,9 +989,8 @@ static void apply_measured_noise(loadid_pipeline_t *p) {
      * noise all the same, for phi_std's floor and the bias noisy columns
      * leave in least squares (loadid_est_config_t's noise_sigma). */
     if (p->n_params == LOADID_NPHI_OFFSET && src != LOADID_NOISE_FALLBACK) {
-        double v[2] = {0, 0};
-        for (int i = 0; i < 6; ++i) v[i / 3] += channel[i] * channel[i] / 3;
-        const loadid_real_t sigma[2] = {(loadid_real_t)sqrt(v[0]), (loadid_real_t)sqrt(v[1])},
+        const loadid_real_t sigma[2] = {(loadid_real_t)loadid_noise_rms3(channel),
+                                        (loadid_real_t)loadid_noise_rms3(channel + 3)},
                             r[2] = {0, 0};
         for (int m = 0; m < p->num_methods; ++m)
             if (m != p->refined_m) loadid_est_set_noise_corr(p->est[m], sigma, r);
