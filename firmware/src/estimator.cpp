@@ -296,6 +296,13 @@ static int spectrum_fits(const loadid::CovInput &in, const loadid_spectrum_t &sp
         }
         if (iv && !all_finite(sp.iv_total[g], n * n)) return LOADID_E_NONFINITE;
     }
+    if (!sp.has_rows) return 0;
+    if (sp.first_bin[sp.n_bands] > LOADID_SPECTRUM_BINS) return -EINVAL;
+    for (int j = 0; j < sp.first_bin[sp.n_bands]; ++j)
+        for (int part = 0; part < 2; ++part)
+            if (!all_finite(sp.row_dft[j][part], LOADID_NROWS * n1) ||
+                (iv && !all_finite(sp.iv_dft[j][part], LOADID_NROWS * n)))
+                return LOADID_E_NONFINITE;
     return 0;
 }
 

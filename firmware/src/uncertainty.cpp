@@ -259,13 +259,80 @@ Md full(const double *m, int n) {
     return Eigen::Map<const Eigen::MatrixXd>(m, n, n);
 }
 
+// The residual's covariance between a sample's rows, each row group's
+// mean variance 1 (uncertainty.hpp), over the bands' bins but the mean
+// (where the regressor has its power); false without the rows apart or
+// where a group has no residual.
+bool row_shape(const loadid_spectrum_t &sp, const Vd &v, Eigen::Matrix<double, 6, 6> &shape) {
+    if (!sp.has_rows) return false;
+    using Rows = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic,
+                                                Eigen::RowMajor, LOADID_NROWS, kMax + 1>>;
+    const int n1 = static_cast<int>(v.size());
+    shape.setZero();
+    for (int j = 1; j < sp.first_bin[sp.n_bands]; ++j)
+        for (int part = 0; part < 2; ++part) {
+            const Eigen::Matrix<double, 6, 1> e = Rows(sp.row_dft[j][part], LOADID_NROWS, n1) * v;
+            shape += e * e.transpose();
+        }
+    double scale[2];
+    for (int g = 0; g < 2; ++g) {
+        const double mean = shape.diagonal().segment<3>(3 * g).mean();
+        if (!(mean > 0) || !std::isfinite(mean)) return false;
+        scale[g] = 1 / std::sqrt(mean);
+    }
+    for (int r = 0; r < LOADID_NROWS; ++r)
+        for (int s = 0; s < LOADID_NROWS; ++s) shape(r, s) *= scale[r / 3] * scale[s / 3];
+    return true;
+}
+
+// Whether a parameter's column carries a measurement's noise (col_exact
+// 1: the accelerometer's, signals sensor or mixed), which a sample's rows
+// share.
+bool measured_columns(const CovInput &in) {
+    if (!in.col_exact) return true;
+    for (int j = 0; j < std::min(in.n, LOADID_NPHI); ++j)
+        if (in.col_exact[j] == Real(1)) return true;
+    return false;
+}
+
+// sum over bin j's rows of Re(X^H S X), X = re + i im (6 x m, row r's m
+// values at r * m): the meat of a residual of covariance S between rows.
+Md bin_meat(const double *re, const double *im, int m, const Eigen::Matrix<double, 6, 6> &S) {
+    using Rows = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic,
+                                                Eigen::RowMajor, LOADID_NROWS, kMax>>;
+    const Rows xr(re, LOADID_NROWS, m), xi(im, LOADID_NROWS, m);
+    return xr.transpose() * S * xr + xi.transpose() * S * xi;
+}
+
+// sum over bin j's rows row0..row0+2 of Re(C^H A): the instruments' and
+// the data's product (rows as bin_meat's; A has n1 values a row).
+Md bin_cross(const loadid_spectrum_t &sp, int j, int n, int row0) {
+    using Rows = Eigen::Map<
+        const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, 3, kMax>, 0,
+        Eigen::OuterStride<>>;
+    Md x = Md::Zero(n, n);
+    for (int part = 0; part < 2; ++part) {
+        const Rows c(sp.iv_dft[j][part] + row0 * n, 3, n, Eigen::OuterStride<>(n));
+        const Rows a(sp.row_dft[j][part] + row0 * (n + 1), 3, n, Eigen::OuterStride<>(n + 1));
+        x += c.transpose() * a;
+    }
+    return x;
+}
+
 // The sandwich's meat from the residual's level per band of frequency
 // (uncertainty.hpp): for each row group g (gf, gt: the force and torque
 // rows' Gram of [A y], columns unweighted) and band, S_gb = v^T G v over
 // the band's values less the fit's leverage tr(H^-1 G_AA) there, at least
-// the wrench noise measured apart; the meat sums S_gb G_AA (IV: the
-// instruments' Gram). False without a spectrum or for another problem
-// than the estimate's own (the drift's).
+// the wrench noise measured apart; a band with too few values left joins
+// the next. IV's fit is oblique, P = A M^-1 C^T W: with the rows apart its
+// leverage in a band is 2 tr(M^-1 C_b^T W A_b) - tr(G_b M^-1 C^T W C M^-T)
+// (tr(H^-1 G_b) for least squares): a regressor whose noise inflates
+// A^T W A would have the least-squares figure take too little off (the
+// sensor's alpha: the torque rows' level 19 % low). With the rows apart a
+// band's meat is sum_j Re(X_j^H S_b X_j) (IV: the instruments' X), S_b the
+// rows' shape scaled to the band's levels; else, and for the rest above
+// the bands, sum S_gb G_AA (IV: the instruments' Gram). False without a
+// spectrum or for another problem than the estimate's own (the drift's).
 bool spectral_meat(const CovInput &in, const Problem &p, const Md &gf, const Md &gt, const Vd &v,
                    Md &meat) {
     constexpr double kMinDof = 12; // a band with fewer joins the next
@@ -273,25 +340,29 @@ bool spectral_meat(const CovInput &in, const Problem &p, const Md &gf, const Md 
     const int n = p.np, n1 = n + 1;
     if (!sp || n != in.n) return false;
     const bool iv = in.kind == CovKind::IV;
-    Md hi;
+    const int nb = sp->n_bands;
+    Md hi, mi;
     if (!spd_inverse(Md((gf + gt).topLeftCorner(n, n)), hi)) return false;
-    meat = Md::Zero(n, n);
+    const bool oblique = iv && sp->has_rows;
+    if (oblique) {
+        mi = Eigen::PartialPivLU<Md>(p.m).inverse();
+        if (!mi.allFinite()) return false;
+    }
+    // Each band's level per row group (nb: the rest), and the rest's Gram.
+    double level[LOADID_SPECTRUM_BANDS + 1][2];
+    Md rest[2];
     for (int grp = 0; grp < 2; ++grp) {
         const double floor = std::pow(measured_noise(in, grp), 2);
-        Md rest = grp == 0 ? gf : gt, rest_iv;
-        if (iv) rest_iv = full(sp->iv_total[grp], n);
-        Md pend = Md::Zero(n1, n1), pend_iv = Md::Zero(n, n);
+        rest[grp] = iv ? full(sp->iv_total[grp], n) : Md((grp == 0 ? gf : gt).topLeftCorner(n, n));
         double pend_rr = 0, pend_dof = 0, pend_lev = 0, used = 0;
-        for (int b = 0; b <= sp->n_bands; ++b) {
-            Md band, band_iv;
+        int first = 0;
+        Md left = grp == 0 ? gf : gt;
+        for (int b = 0; b <= nb; ++b) {
             double dof = 0, rr = 0, lev = 0;
-            if (b < sp->n_bands) {
-                band = full(sp->gram[b][grp], n1);
-                rest -= band;
-                if (iv) {
-                    band_iv = full(sp->iv_gram[b][grp], n);
-                    rest_iv -= band_iv;
-                }
+            if (b < nb) {
+                const Md band = full(sp->gram[b][grp], n1);
+                left -= band;
+                rest[grp] -= iv ? full(sp->iv_gram[b][grp], n) : Md(band.topLeftCorner(n, n));
                 // Three channels, two real values a bin (one for the mean).
                 const double values = b == 0 ? 3 : 6.0 * (sp->first_bin[b + 1] - sp->first_bin[b]);
                 used += values;
@@ -299,21 +370,48 @@ bool spectral_meat(const CovInput &in, const Problem &p, const Md &gf, const Md 
                     dof = values;
                     rr = v.dot(band * v);
                     lev = (hi * band.topLeftCorner(n, n)).trace();
+                    if (oblique) {
+                        Md x = Md::Zero(n, n);
+                        for (int j = sp->first_bin[b]; j < sp->first_bin[b + 1]; ++j)
+                            x += bin_cross(*sp, j, n, 3 * grp);
+                        lev = 2 * (mi * x).trace() -
+                              (band.topLeftCorner(n, n) * mi * p.cc * mi.transpose()).trace();
+                    }
                 }
             } else {
-                band = rest, band_iv = rest_iv;
                 dof = 3.0 * static_cast<double>(in.samples) - used;
-                rr = v.dot(rest * v);
-                lev = (hi * rest.topLeftCorner(n, n)).trace();
+                rr = v.dot(left * v);
+                lev = (hi * left.topLeftCorner(n, n)).trace();
             }
-            pend += band, pend_rr += rr, pend_dof += dof, pend_lev += lev;
-            if (iv) pend_iv += band_iv;
-            if (b < sp->n_bands && pend_dof - pend_lev < kMinDof) continue;
-            const double level =
+            pend_rr += rr, pend_dof += dof, pend_lev += lev;
+            if (b < nb && pend_dof - pend_lev < kMinDof) continue;
+            const double l =
                 std::max(std::max(pend_rr, 0.0) / std::max(pend_dof - pend_lev, 1.0), floor);
-            meat += level * (iv ? pend_iv : Md(pend.topLeftCorner(n, n)));
-            pend.setZero(), pend_iv.setZero();
+            for (; first <= b; ++first) level[first][grp] = l;
             pend_rr = pend_dof = pend_lev = 0;
+        }
+    }
+    meat = level[nb][0] * rest[0] + level[nb][1] * rest[1];
+    Eigen::Matrix<double, 6, 6> shape;
+    const bool apart = measured_columns(in) && row_shape(*sp, v, shape);
+    for (int b = 0; b < nb; ++b) {
+        if (!apart) {
+            for (int grp = 0; grp < 2; ++grp)
+                meat += level[b][grp] * (iv ? full(sp->iv_gram[b][grp], n)
+                                            : Md(full(sp->gram[b][grp], n1).topLeftCorner(n, n)));
+            continue;
+        }
+        Eigen::Matrix<double, 6, 6> s;
+        for (int r = 0; r < LOADID_NROWS; ++r)
+            for (int c = 0; c < LOADID_NROWS; ++c)
+                s(r, c) = shape(r, c) * std::sqrt(level[b][r / 3] * level[b][c / 3]);
+        for (int j = sp->first_bin[b]; j < sp->first_bin[b + 1]; ++j) {
+            if (iv) {
+                meat += bin_meat(sp->iv_dft[j][0], sp->iv_dft[j][1], n, s);
+            } else {
+                const Md m = bin_meat(sp->row_dft[j][0], sp->row_dft[j][1], n1, s);
+                meat += m.topLeftCorner(n, n);
+            }
         }
     }
     return meat.allFinite();

@@ -285,6 +285,7 @@ int loadid_est_uncertainty(const loadid_est_t *est, const loadid_real_t *phi, lo
  * 1, c_j = 2; K samples. The bins above the last band are the rest: the
  * estimator's own information less the bands. */
 #define LOADID_SPECTRUM_BANDS 9
+#define LOADID_SPECTRUM_BINS 17 /* most bins in the bands */
 typedef struct {
     int n_bands;                              /* 2..LOADID_SPECTRUM_BANDS */
     int first_bin[LOADID_SPECTRUM_BANDS + 1]; /* first_bin[0] = 0, first_bin[1] = 1 */
@@ -294,6 +295,17 @@ typedef struct {
     int has_iv;
     double iv_gram[LOADID_SPECTRUM_BANDS][2][LOADID_MAX_PARAMS * LOADID_MAX_PARAMS];
     double iv_total[2][LOADID_MAX_PARAMS * LOADID_MAX_PARAMS];
+    /* The rows apart (has_rows), for the residual's covariance between a
+     * sample's rows: the regressor's noise reaches them together (a - g's
+     * in m (a - g) and in (m c) x (a - g), alpha's in alpha x (m c) and in
+     * I alpha), which one level per row group leaves out (RIV with the
+     * sensor's accelerometer: 20-30 % narrow on m c and I). row_dft[j][0]
+     * and [1] are the real and imaginary parts of sqrt(c_j / K) D_r X_j,
+     * row r's n + 1 values at bin j < first_bin[n_bands] (row r at
+     * r (n + 1)); iv_dft the same of D C (n values a row). */
+    int has_rows;
+    double row_dft[LOADID_SPECTRUM_BINS][2][LOADID_NROWS * (LOADID_MAX_PARAMS + 1)];
+    double iv_dft[LOADID_SPECTRUM_BINS][2][LOADID_NROWS * LOADID_MAX_PARAMS];
 } loadid_spectrum_t;
 
 /* loadid_est_uncertainty with the residual's level taken per band of
@@ -302,7 +314,14 @@ typedef struct {
  * G), S_gb the residual's power in band b of row group g over its degrees
  * of freedom less the fit's leverage there, tr(H^-1 G_gb); a band with
  * fewer than 12 left joins the next. A flat residual gives the white
- * sandwich. S_gb is at least the wrench noise measured apart
+ * sandwich. With the rows apart (has_rows) and columns with a
+ * measurement's noise (col_exact 1) a band's meat is
+ * sum_j Re(X_j^H S_b X_j) over its bins (IV: the instruments' X), S_b the
+ * residual's covariance between rows over the bins 1.. (its shape) scaled
+ * to the band's two levels: a residual correlated between rows, or of
+ * unequal rows, is counted. With the rows apart RIV's leverage in a
+ * band is its own oblique fit's.
+ * S_gb is at least the wrench noise measured apart
  * (noise_sigma), which replaces the correlated-noise widening. The zeroing
  * offset's share is added as by loadid_est_uncertainty. Returns as
  * loadid_est_uncertainty, and -EINVAL for a spectrum that does not fit

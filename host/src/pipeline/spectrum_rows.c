@@ -38,6 +38,7 @@ int loadid_spectrum_rows_create(int capacity, int n_params, int instruments,
     if (!out || capacity < 1 || (n_params != LOADID_NPHI && n_params != LOADID_NPHI_OFFSET))
         return -EINVAL;
     _Static_assert(N_BANDS == LOADID_SPECTRUM_BANDS, "bands of estimator.h");
+    _Static_assert(N_BINS == LOADID_SPECTRUM_BINS, "bins of estimator.h");
     loadid_spectrum_rows_t *r = calloc(1, sizeof *r);
     if (!r) return -ENOMEM;
     r->capacity = capacity, r->n = n_params, r->instruments = instruments != 0;
@@ -190,6 +191,27 @@ static void add_gram(const loadid_spectrum_rows_t *r, int j, int first, int stri
     }
 }
 
+/* out's rows apart (estimator.h): each bin's weighted rows. */
+static void rows_apart(const loadid_spectrum_rows_t *r, const double d[ROWS],
+                       loadid_spectrum_t *out) {
+    const int n = r->n, n1 = n + 1, nv = r->nv;
+    const double K = (double)r->count;
+    for (int j = 0; j < N_BINS; ++j) {
+        const double w = sqrt((j == 0 ? 1.0 : 2.0) / K);
+        for (int part = 0; part < 2; ++part) {
+            const double *x = r->dft + ((size_t)j * 2 + (size_t)part) * (size_t)nv;
+            for (int row = 0; row < ROWS; ++row) {
+                for (int i = 0; i < n1; ++i)
+                    out->row_dft[j][part][row * n1 + i] = w * d[row] * x[row * n1 + i];
+                if (out->has_iv)
+                    for (int i = 0; i < n; ++i)
+                        out->iv_dft[j][part][row * n + i] = w * d[row] * x[ROWS * n1 + row * n + i];
+            }
+        }
+    }
+    out->has_rows = 1;
+}
+
 int loadid_spectrum_rows_bands(const loadid_spectrum_rows_t *r, const loadid_real_t row_sigma[6],
                                loadid_spectrum_t *out) {
     if (!r || !row_sigma || !out || !r->transformed) return -EINVAL;
@@ -213,6 +235,7 @@ int loadid_spectrum_rows_bands(const loadid_spectrum_rows_t *r, const loadid_rea
                 if (out->has_iv) add_gram(r, j, ROWS * n1, n, n, 3 * g, d, w, out->iv_gram[b][g]);
             }
         }
+    rows_apart(r, d, out);
     if (!out->has_iv) return 0;
     for (int row = 0; row < ROWS; ++row) { /* C^T W C of each row group, both triangles */
         const double *m = r->ctot + (size_t)row * (size_t)(n * n);
