@@ -278,16 +278,18 @@ template <int N>
 CovInput cov_input(CovKind kind, const Excitation<N> &ex, const Real *t, int64_t samples,
                    const Real *phi, const loadid_est_config_t &cfg, const Real *iv_m = nullptr,
                    const Real *iv_cc = nullptr, const double *iv_drift = nullptr,
-                   const Real *iv_b = nullptr) {
-    return {kind, N, ex.gram().data(), ex.gram_torque().data(), t, samples, phi, iv_m, iv_cc,
-            ex.row_sum().data(), ex.row_weight().data(),
-            N == LOADID_NPHI ? cfg.offset_cov : nullptr, cfg.noise_sigma, cfg.noise_corr,
-            cfg.col_exact,
-            // REFINED fits the drift itself (refined.h).
-            N == LOADID_NPHI_OFFSET && cfg.method != LOADID_METHOD_REFINED
-                ? ex.drift_sums().cross.data()
-                : nullptr,
-            ex.drift_sums().y.data(), ex.drift_sums().tt, iv_drift, iv_b};
+                   const Real *iv_b = nullptr, const Real *iv_cc_torque = nullptr) {
+    CovInput in{kind, N, ex.gram().data(), ex.gram_torque().data(), t, samples, phi, iv_m, iv_cc,
+                ex.row_sum().data(), ex.row_weight().data(),
+                N == LOADID_NPHI ? cfg.offset_cov : nullptr, cfg.noise_sigma, cfg.noise_corr,
+                cfg.col_exact,
+                // REFINED fits the drift itself (refined.h).
+                N == LOADID_NPHI_OFFSET && cfg.method != LOADID_METHOD_REFINED
+                    ? ex.drift_sums().cross.data()
+                    : nullptr,
+                ex.drift_sums().y.data(), ex.drift_sums().tt, iv_drift, iv_b};
+    in.iv_cc_torque = iv_cc_torque;
+    return in;
 }
 
 inline Vec6 row_weights(const loadid_est_config_t &cfg) {

@@ -44,6 +44,7 @@ class RecursiveLs final : public loadid_est {
         phi_.setZero();
         M_ = Eigen::Matrix<Real, N, N>::Identity() / cfg.p0; // RIV: Sigma^-1
         CC_.setZero();
+        CCt_.setZero();
         b_.setZero();
         iv_drift_.setZero();
         U_.setIdentity(); // RLS: Sigma = U D U^T
@@ -87,7 +88,7 @@ class RecursiveLs final : public loadid_est {
                                 phi, cfg);
         return cov_input<N>(CovKind::IV, excitation_, excitation_.col_weight().data(), samples_,
                             phi, cfg, M_.data(), CC_.data(), kDrift ? iv_drift_.data() : nullptr,
-                            b_.data());
+                            b_.data(), CCt_.data());
     }
 
   private:
@@ -127,11 +128,13 @@ class RecursiveLs final : public loadid_est {
         if (lam != Real(1)) { // x * 1 is x to the bit
             M_ = lam * M_;
             CC_ = lam * CC_;
+            CCt_ = lam * CCt_;
             b_ = lam * b_;
             iv_drift_ *= double(lam);
         }
         M_.noalias() += CtLi.lazyProduct(B);
         CC_.noalias() += CtLi.lazyProduct(C); // C^T W C: the instruments' part of RIV's covariance
+        CCt_.noalias() += CtLi.template rightCols<3>().lazyProduct(C.template bottomRows<3>());
         b_.noalias() += CtLi * y;
         if constexpr (kDrift) // the drift witness's IV sums, on the excitation's clock
             iv_drift_ += (double(samples_) * 1e-3) * CtLi.template cast<double>();
@@ -142,6 +145,7 @@ class RecursiveLs final : public loadid_est {
     Vec<N> phi_;
     Eigen::Matrix<Real, N, N> M_;
     Eigen::Matrix<Real, N, N> CC_;
+    Eigen::Matrix<Real, N, N> CCt_; // CC_ over the torque rows
     Vec<N> b_;
     // sum_k t_k C_k^T W (uncertainty.hpp), with the offset estimated only
     static constexpr bool kDrift = N == LOADID_NPHI_OFFSET;

@@ -130,7 +130,7 @@ Md weights_share(const Vd &t, const Vd &phi, const Md &hi, double lmin, int nois
 // exact_from on are exact (the drift's): TLS takes no noise off them.
 struct Problem {
     int np = 0, exact_from = 0;
-    Md gs, gts, m, cc;
+    Md gs, gts, m, cc, cct; // cct: cc over the torque rows (empty: not kept)
     Vd t, phi;
     bool witness = true; // add the zeroing offset's share and the drift witness
     Md out;              // in.n x np: what is reported of phi (empty: its first in.n)
@@ -155,6 +155,12 @@ Problem plain(const CovInput &in) {
                 p.m(i, j) = static_cast<double>(in.iv_m[j * n + i]);
                 p.cc(i, j) = static_cast<double>(in.iv_cc[j * n + i]);
             }
+        if (in.iv_cc_torque) {
+            p.cct.resize(n, n);
+            for (int j = 0; j < n; ++j)
+                for (int i = 0; i < n; ++i)
+                    p.cct(i, j) = static_cast<double>(in.iv_cc_torque[j * n + i]);
+        }
     }
     return p;
 }
@@ -204,6 +210,10 @@ bool with_drift(const CovInput &in, const Problem &q, Problem &p, Vd &pull) {
         p.cc = Md::Zero(n2, n2);
         p.m.topLeftCorner(n, n) = q.m;
         p.cc.topLeftCorner(n, n) = q.cc;
+        if (q.cct.size() != 0) {
+            p.cct = Md::Zero(n2, n2);
+            p.cct.topLeftCorner(n, n) = q.cct;
+        }
         Vd b(n2);
         for (int j = 0; j < n; ++j) b(j) = static_cast<double>(in.iv_b[j]);
         for (int r = 0; r < nd; ++r) {
@@ -213,6 +223,10 @@ bool with_drift(const CovInput &in, const Problem &q, Problem &p, Vd &pull) {
                 p.m(n + r, j) = d * in.drift_cross[j * 6 + r] / q.t(j);
             }
             p.m(n + r, n + r) = p.cc(n + r, n + r) = d * d * in.drift_tt;
+            if (p.cct.size() != 0 && r >= 3) { // a drift column reaches its own row only
+                p.cct.col(n + r) = p.cc.col(n + r);
+                p.cct.row(n + r) = p.cc.row(n + r);
+            }
             b(n + r) = d * in.drift_y[r] / q.t(n);
         }
         x16 = Eigen::PartialPivLU<Md>(q.m).solve(Vd(b.head(n)));
@@ -453,7 +467,11 @@ int covariance_of(const CovInput &in, const Problem &p, Real *std, Real *scale) 
         Eigen::PartialPivLU<Md> lu(p.m);
         const Md mi = lu.inverse();
         if (!mi.allFinite()) return LOADID_E_NOT_EXCITED;
-        const Md meat = spectral ? smeat : Md(s2_iv * p.cc);
+        // One level per row group as least squares' where the torque rows'
+        // part is kept, else the rows' mean.
+        const Md meat = spectral            ? smeat
+                        : p.cct.size() != 0 ? Md(sf2 * (p.cc - p.cct) + st2 * p.cct)
+                                            : Md(s2_iv * p.cc);
         if (p.witness)
             cov = mi * meat * mi.transpose() + offset_share(in, t, mi) + drift_share(in, p);
         else

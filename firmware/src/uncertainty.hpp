@@ -17,6 +17,11 @@
 // (G_f, G_t the two row groups' A^T W A, H the whole, for TLS less the
 // noise's share): the errors of a - g, omega and alpha reach the two groups
 // differently, and one pooled s gave 83 % coverage on Izz and 98 % on m.
+// IV takes M^-1 (s_f^2 C_f^T W C_f + s_t^2 C_t^T W C_t) M^-T likewise
+// (RIV keeps C^T W C over the torque rows beside the whole): with the
+// sensor's accelerometer as a - g and alpha the pooled s had RMS error /
+// std 0.44 on m and up to 1.57 on the rest (test_spectrum_rows), the
+// groups' 0.73-1.21.
 // A correlated (low-pass filtered) wrench noise averages out less than
 // white: for regressors that vary slowly against the noise's correlation
 // time its share of the score's variance is its variance times the
@@ -136,6 +141,9 @@ struct CovInput {
     // column-major) and sum_k C_k^T W y_k (n); nullptr: the least-squares d.
     const double *iv_drift = nullptr;
     const Real *iv_b = nullptr;
+    // IV: iv_cc over the torque rows only (nullptr: one level for all rows
+    // in the white meat).
+    const Real *iv_cc_torque = nullptr;
     // Non-null (with the drift sums): the drift fitted rather than
     // witnessed. phi_fitted (n values) gets phi less d, and std is that
     // estimate's: the covariance of the model with the six drift columns

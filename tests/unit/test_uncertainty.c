@@ -386,8 +386,10 @@ static void test_riv_drift_witness_is_its_own_pull(void **state) {
     fit_drift(&d, &cfg, phi, std, phi_f, std_f);
     enum { N = 16, N2 = 22 };
     /* M22 = sum c a^T w over rows (c, a: [C row, t e_r], [A row, t e_r]);
-     * the LS normal equations beside it; C^T W C over 16 and 22 columns. */
-    static double M[N2 * N2], H[N2 * N2], CC[N * N], CC22[N2 * N2], inv[N2 * N2], work[N2 * N2];
+     * the LS normal equations beside it; C^T W C over 16 and 22 columns,
+     * the force and the torque rows apart. */
+    static double M[N2 * N2], H[N2 * N2], CC[2][N * N], CC22[2][N2 * N2], inv[N2 * N2],
+        work[N2 * N2];
     double bm[N2] = {0}, bh[N2] = {0}, rss[2] = {0};
     memset(M, 0, sizeof M);
     memset(H, 0, sizeof H);
@@ -406,11 +408,11 @@ static void test_riv_drift_witness_is_its_own_pull(void **state) {
                 bh[i] += w * a[i] * y[r];
                 for (int j = 0; j < N2; ++j) {
                     M[i * N2 + j] += w * c[i] * a[j], H[i * N2 + j] += w * a[i] * a[j];
-                    CC22[i * N2 + j] += w * c[i] * c[j];
+                    CC22[r >= 3][i * N2 + j] += w * c[i] * c[j];
                 }
             }
             for (int i = 0; i < N; ++i)
-                for (int j = 0; j < N; ++j) CC[i * N + j] += w * c[i] * c[j];
+                for (int j = 0; j < N; ++j) CC[r >= 3][i * N + j] += w * c[i] * c[j];
             rss[r >= 3] += w * e * e;
         }
     }
@@ -432,14 +434,15 @@ static void test_riv_drift_witness_is_its_own_pull(void **state) {
             }
         }
     }
-    const double half = (6.0 * d.n_samples - N) / 2, s2 = (rss[0] + rss[1]) / half / 2;
+    const double half = (6.0 * d.n_samples - N) / 2;
     double worst = 0, share_max = 0, ls_apart = 0;
     for (int i = 0; i < 10; ++i) {
-        double var = 0; /* s^2 (Mi CC Mi^T)_ii */
-        for (int a = 0; a < N; ++a)
-            for (int c = 0; c < N; ++c)
-                var += inv16[0][i * N + a] * CC[a * N + c] * inv16[0][i * N + c];
-        var *= s2;
+        double var = 0; /* (Mi (s_f^2 CC_f + s_t^2 CC_t) Mi^T)_ii */
+        for (int g = 0; g < 2; ++g)
+            for (int a = 0; a < N; ++a)
+                for (int c = 0; c < N; ++c)
+                    var += rss[g] / half * inv16[0][i * N + a] * CC[g][a * N + c] *
+                           inv16[0][i * N + c];
         const double div = x[0][0][i] - x[0][1][i], dls = x[1][0][i] - x[1][1][i];
         const double wit = div * div;
         worst = fmax(worst, fabs((double)std[i] * std[i] - var - wit) / (var + wit));
@@ -455,7 +458,8 @@ static void test_riv_drift_witness_is_its_own_pull(void **state) {
     assert_true(ls_apart > 1e-3);
 
     /* The drift fitted: phi - d_IV is the 22-column IV fit, and its std
-     * s^2 M22^-1 C22^T W C22 M22^-T at that fit's residual. */
+     * M22^-1 (s_f^2 C22_f^T W C22_f + s_t^2 C22_t^T W C22_t) M22^-T at that
+     * fit's residual. */
     double rss22[2] = {0};
     for (int k = 0; k < d.n_samples; ++k) {
         const loadid_real_t *A = dataset_A(&d, k), *y = dataset_y(&d, k);
@@ -466,15 +470,16 @@ static void test_riv_drift_witness_is_its_own_pull(void **state) {
             rss22[r >= 3] += w * e * e;
         }
     }
-    const double s22 = (rss22[0] + rss22[1]) / ((6.0 * d.n_samples - N2) / 2) / 2;
+    const double half22 = (6.0 * d.n_samples - N2) / 2;
     double phi_worst = 0, std_worst = 0;
     for (int i = 0; i < N; ++i) {
         phi_worst = fmax(phi_worst, fabs(phi_f[i] - x[0][1][i]) / (double)std_f[i]);
         double var = 0;
-        for (int a = 0; a < N2; ++a)
-            for (int c = 0; c < N2; ++c)
-                var += inv22[i * N2 + a] * CC22[a * N2 + c] * inv22[i * N2 + c];
-        var *= s22;
+        for (int g = 0; g < 2; ++g)
+            for (int a = 0; a < N2; ++a)
+                for (int c = 0; c < N2; ++c)
+                    var += rss22[g] / half22 * inv22[i * N2 + a] * CC22[g][a * N2 + c] *
+                           inv22[i * N2 + c];
         std_worst = fmax(std_worst, fabs((double)std_f[i] - sqrt(var)) / sqrt(var));
     }
     print_message(

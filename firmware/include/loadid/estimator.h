@@ -257,7 +257,8 @@ int loadid_est_estimate_unique(const loadid_est_t *est, loadid_real_t *phi,
 /* One standard deviation of each element of phi, this estimator's own
  * estimate (as loadid_est_estimate gave it), from its covariance on the
  * weighted data: RLS and LS_BATCH s^2 (A^T W A)^-1 (Sigma of eq. 17); RIV
- * s^2 M^-1 (C^T W C) M^-T (eqs. 20-22); RTLS, TLS_BATCH and REFINED the
+ * M^-1 (s_f^2 C_f^T W C_f + s_t^2 C_t^T W C_t) M^-T (eqs. 20-22, the force
+ * and torque rows apart); RTLS, TLS_BATCH and REFINED the
  * first-order covariance of the TLS solution, each row group's residual
  * variance widened for a correlated wrench noise (noise_sigma,
  * noise_corr), plus what the zeroing offset's error (offset_cov) adds. W = D^2 (row weights); the
