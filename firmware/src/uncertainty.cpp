@@ -38,6 +38,22 @@ bool spd_inverse(const Md &S, Md &inv) {
     return true;
 }
 
+// A full matrix from a column-major block of n x n values (the core's
+// scalar or double).
+template <class T>
+Md full(const T *m, int n) {
+    return Eigen::Map<const Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>>(m, n, n)
+        .template cast<double>();
+}
+
+// Row r's m values at r * stride (the spectrum's rows apart, estimator.h).
+using RowsMap = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic,
+                                               Eigen::RowMajor, LOADID_NROWS, kMax + 1>,
+                           0, Eigen::OuterStride<>>;
+RowsMap rows_of(const double *x, int rows, int m, int stride) {
+    return RowsMap(x, rows, m, Eigen::OuterStride<>(stride));
+}
+
 // The wrench noise measured apart, row group grp's, in units of the row
 // weights D (1 when the weights are that noise); 0 without a measurement.
 double measured_noise(const CovInput &in, int grp) {
@@ -148,19 +164,9 @@ Problem plain(const CovInput &in) {
     p.phi.resize(n);
     for (int j = 0; j < n; ++j) p.phi(j) = static_cast<double>(in.phi[j]);
     if (in.kind == CovKind::IV) {
-        p.m.resize(n, n);
-        p.cc.resize(n, n);
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i) {
-                p.m(i, j) = static_cast<double>(in.iv_m[j * n + i]);
-                p.cc(i, j) = static_cast<double>(in.iv_cc[j * n + i]);
-            }
-        if (in.iv_cc_torque) {
-            p.cct.resize(n, n);
-            for (int j = 0; j < n; ++j)
-                for (int i = 0; i < n; ++i)
-                    p.cct(i, j) = static_cast<double>(in.iv_cc_torque[j * n + i]);
-        }
+        p.m = full(in.iv_m, n);
+        p.cc = full(in.iv_cc, n);
+        if (in.iv_cc_torque) p.cct = full(in.iv_cc_torque, n);
     }
     return p;
 }
@@ -268,24 +274,18 @@ Md drift_share(const CovInput &in, const Problem &q) {
     return pull * pull.transpose();
 }
 
-// A full matrix from a column-major block of n x n values.
-Md full(const double *m, int n) {
-    return Eigen::Map<const Eigen::MatrixXd>(m, n, n);
-}
-
 // The residual's covariance between a sample's rows, each row group's
 // mean variance 1 (uncertainty.hpp), over the bands' bins but the mean
 // (where the regressor has its power); false without the rows apart or
 // where a group has no residual.
 bool row_shape(const loadid_spectrum_t &sp, const Vd &v, Eigen::Matrix<double, 6, 6> &shape) {
     if (!sp.has_rows) return false;
-    using Rows = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic,
-                                                Eigen::RowMajor, LOADID_NROWS, kMax + 1>>;
     const int n1 = static_cast<int>(v.size());
     shape.setZero();
     for (int j = 1; j < sp.first_bin[sp.n_bands]; ++j)
         for (int part = 0; part < 2; ++part) {
-            const Eigen::Matrix<double, 6, 1> e = Rows(sp.row_dft[j][part], LOADID_NROWS, n1) * v;
+            const Eigen::Matrix<double, 6, 1> e =
+                rows_of(sp.row_dft[j][part], LOADID_NROWS, n1, n1) * v;
             shape += e * e.transpose();
         }
     double scale[2];
@@ -312,24 +312,17 @@ bool measured_columns(const CovInput &in) {
 // sum over bin j's rows of Re(X^H S X), X = re + i im (6 x m, row r's m
 // values at r * m): the meat of a residual of covariance S between rows.
 Md bin_meat(const double *re, const double *im, int m, const Eigen::Matrix<double, 6, 6> &S) {
-    using Rows = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic,
-                                                Eigen::RowMajor, LOADID_NROWS, kMax>>;
-    const Rows xr(re, LOADID_NROWS, m), xi(im, LOADID_NROWS, m);
+    const RowsMap xr = rows_of(re, LOADID_NROWS, m, m), xi = rows_of(im, LOADID_NROWS, m, m);
     return xr.transpose() * S * xr + xi.transpose() * S * xi;
 }
 
 // sum over bin j's rows row0..row0+2 of Re(C^H A): the instruments' and
 // the data's product (rows as bin_meat's; A has n1 values a row).
 Md bin_cross(const loadid_spectrum_t &sp, int j, int n, int row0) {
-    using Rows = Eigen::Map<
-        const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, 3, kMax>, 0,
-        Eigen::OuterStride<>>;
     Md x = Md::Zero(n, n);
-    for (int part = 0; part < 2; ++part) {
-        const Rows c(sp.iv_dft[j][part] + row0 * n, 3, n, Eigen::OuterStride<>(n));
-        const Rows a(sp.row_dft[j][part] + row0 * (n + 1), 3, n, Eigen::OuterStride<>(n + 1));
-        x += c.transpose() * a;
-    }
+    for (int part = 0; part < 2; ++part)
+        x += rows_of(sp.iv_dft[j][part] + row0 * n, 3, n, n).transpose() *
+             rows_of(sp.row_dft[j][part] + row0 * (n + 1), 3, n, n + 1);
     return x;
 }
 
