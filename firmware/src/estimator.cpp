@@ -29,7 +29,9 @@ bool valid_config(const loadid_est_config_t &c) {
     for (int i = 0; i < LOADID_NROWS; ++i)
         if (!positive_finite(c.row_sigma[i])) return false;
     for (int j = 0; j <= c.n_params; ++j)
-        if (!positive_finite(c.col_weight[j]) || !positive_finite(c.col_exact[j])) return false;
+        if (!positive_finite(c.col_weight[j]) || !positive_finite(c.col_exact[j]) ||
+            !(c.col_measured[j] >= 0 && c.col_measured[j] <= 1))
+            return false;
     if (!positive_finite(c.p0)) return false;
     if (!(c.forgetting > 0 && c.forgetting <= 1)) return false;
     if (c.rtls_init_samples < 2 || c.rtls_init_samples > 3) return false;
@@ -169,6 +171,14 @@ extern "C" int loadid_est_set_exact(loadid_est_t *est, const loadid_real_t *col_
         if (!positive_finite(col_exact[j])) return -EINVAL;
     for (int j = 0; j <= est->cfg.n_params; ++j) est->cfg.col_exact[j] = col_exact[j];
     est->reweight();
+    return 0;
+}
+
+extern "C" int loadid_est_set_measured(loadid_est_t *est, const loadid_real_t *col_measured) {
+    if (!est || !col_measured) return -EINVAL;
+    for (int j = 0; j <= est->cfg.n_params; ++j)
+        if (!(col_measured[j] >= 0 && col_measured[j] <= 1)) return -EINVAL;
+    for (int j = 0; j <= est->cfg.n_params; ++j) est->cfg.col_measured[j] = col_measured[j];
     return 0;
 }
 

@@ -289,6 +289,7 @@ CovInput cov_input(CovKind kind, const Excitation<N> &ex, const Real *t, int64_t
                     : nullptr,
                 ex.drift_sums().y.data(), ex.drift_sums().tt, iv_drift, iv_b};
     in.iv_cc_torque = iv_cc_torque;
+    in.col_measured = cfg.col_measured;
     return in;
 }
 

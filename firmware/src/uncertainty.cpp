@@ -85,7 +85,9 @@ Md offset_share(const CovInput &in, const Vd &t, const Md &inv) {
 
 // b b^T, the bias the columns' noise may leave in phi (uncertainty.hpp).
 // h: sum A^T W A (n x n, without the column weights). Columns counted
-// exact (a joint filter's) pull by h^-1 C phi. For least squares
+// exact (a joint filter's) pull by h^-1 C phi, but for least squares the
+// share of their noise that is a measurement's (col_measured) counts as a
+// noisy column's. For least squares
 // (least_squares) the noisy ones too: their error is a measurement's, so
 // E[h] = H0 + C and phi_LS = (H0 + C)^-1 H0 phi, i.e. phi - phi_LS =
 // (h - C)^-1 C phi_LS. The column weights give C in units of the row
@@ -105,8 +107,11 @@ Md attenuation_share(const CovInput &in, const Vd &t, const Vd &phi, const Md &h
     for (int j = 0; j < std::min(n, LOADID_NPHI); ++j) { // the offset columns are exact
         const double exact = static_cast<double>(in.col_exact[j]);
         if (exact != 1.0) {
-            const double t_noise = t(j) / exact;
-            c(j) = rows / (t_noise * t_noise);
+            const double t_noise = t(j) / exact, all = rows / (t_noise * t_noise);
+            const double measured =
+                least_squares && in.col_measured ? static_cast<double>(in.col_measured[j]) : 0;
+            c(j) = (1 - measured) * all;
+            noisy(j) = kappa * measured * all;
         } else if (least_squares) {
             noisy(j) = kappa * rows / (t(j) * t(j));
         }

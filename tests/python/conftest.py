@@ -139,6 +139,7 @@ class LoadidEstConfig(ctypes.Structure):
         ("max_condition", real_t),
         ("max_noise_ratio", real_t),
         ("col_exact", real_t * (LOADID_MAX_PARAMS + 1)),     # n_params + 1 used
+        ("col_measured", real_t * (LOADID_MAX_PARAMS + 1)),  # n_params + 1 used
         ("offset_cov", real_t * (LOADID_NROWS * LOADID_NROWS)),  # 6 x 6 row-major
         ("noise_sigma", real_t * 2),                         # force, torque rows
         ("noise_corr", real_t * 2),                          # force, torque rows

@@ -52,6 +52,7 @@ def test_config_default_lands_in_the_documented_fields(n_params):
     assert cfg.max_condition == 1e6
     assert cfg.max_noise_ratio == 0.95
     np.testing.assert_array_equal(np.array(cfg.col_exact), 1.0)
+    np.testing.assert_array_equal(np.array(cfg.col_measured), 0.0)
     np.testing.assert_array_equal(np.array(cfg.offset_cov), 0.0)
     np.testing.assert_array_equal(np.array(cfg.noise_sigma), 0.0)
     np.testing.assert_array_equal(np.array(cfg.noise_corr), 0.0)

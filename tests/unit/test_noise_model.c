@@ -208,6 +208,15 @@ static void test_filter_columns_count_as_exact(void **state) {
     /* m: a - g (JR3) in 3 force rows; Ixx: alpha_x and 2 products of omega. */
     assert_true(fabs(e.col_weight[0] - sqrt(6 / (3 * s2 / f2))) < 1e-12 * e.col_weight[0]);
     assert_true(fabs(e.col_weight[4] - sqrt(6 / ((b2 + 2 * q) / t2))) < 1e-9 * e.col_weight[4]);
+    /* The measured share of each column's noise (col_measured): all of m's
+     * (a - g), of m c's the a - g in 2 torque rows beside the filter's full
+     * alpha and omega in the force rows, none of the inertia's. */
+    const double B2 = 2.0 * 2.0, Q = 2 * wt * wt * 0.003 * 0.003;
+    const double mc_share = 2 * s2 / t2 / ((2 * B2 + 3 * Q) / f2 + 2 * s2 / t2);
+    assert_true(mc_share > 0.01 && mc_share < 0.99);
+    assert_true(fabs(e.col_measured[0] - 1) < 1e-9);
+    for (int j = 1; j < 4; ++j) assert_true(fabs(e.col_measured[j] - mc_share) < 1e-9);
+    for (int j = 4; j < 10; ++j) assert_true(e.col_measured[j] < 1e-12);
     /* alpha configured: used as given. */
     cfg.noise_given = LOADID_NOISE_GIVEN_KF_ALPHA;
     cfg.kalman_alpha_sigma = 2.0;

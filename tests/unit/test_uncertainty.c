@@ -613,6 +613,54 @@ static void test_ls_counts_the_bias_of_noisy_columns(void **state) {
 #endif
 }
 
+/* A column counted exact whose noise is, in share col_measured, a
+ * measurement's (signals mixed: m c's columns hold the filter's alpha and
+ * the accelerometer's a - g): least squares' phi_std counts that share as
+ * a noisy column's. All of it measured, on the data above, gives the std
+ * of the same columns counted noisy; none of it, the exact columns'
+ * first-order pull, which sizes a 21 % attenuation short. */
+static void test_ls_counts_the_measured_share_of_exact_columns(void **state) {
+    (void)state;
+    dataset_spec_t spec = {
+        .seed = 7919u + 17u, .n_samples = 1500, .n_params = 10, .noise = kPaperNoise};
+    spec.noise.sigma_spec *= 4;
+    dataset_t d;
+    assert_int_equal(dataset_make(&spec, &d), 0);
+    loadid_real_t std[3][10], phi[10], scale;
+    for (int v = 0; v < 3; ++v) { /* noisy; exact, all measured; exact, none */
+        loadid_est_config_t cfg;
+        dataset_config(&spec, LOADID_METHOD_LS_BATCH, &cfg);
+        cfg.noise_sigma[0] = (loadid_real_t)spec.noise.sigma_f;
+        cfg.noise_sigma[1] = (loadid_real_t)spec.noise.sigma_tau;
+        for (int j = 0; v > 0 && j < 10; ++j) {
+            cfg.col_weight[j] *= 2, cfg.col_exact[j] = 2; /* the same noise behind */
+            cfg.col_measured[j] = v == 1 ? 1 : 0;
+        }
+        fit_unique(&d, &cfg, phi, std[v], &scale);
+    }
+    double same = 0;
+    for (int j = 0; j < 10; ++j) same = fmax(same, fabs(std[1][j] / std[0][j] - 1));
+    print_message(
+        "measured share 1 against noisy columns: std within %.1e; share 0: the "
+        "mass's std %.2f times\n",
+        same, (double)(std[2][0] / std[0][0]));
+    assert_true(same < 1e-9);
+    assert_true(std[2][0] < 0.9 * std[0][0]); /* 0.76: the first order sizes less */
+    loadid_est_t *est = NULL;
+    loadid_est_config_t cfg;
+    dataset_config(&spec, LOADID_METHOD_LS_BATCH, &cfg);
+    assert_int_equal(loadid_est_create(&cfg, &est), 0);
+    loadid_real_t share[11] = {0};
+    share[3] = 1.5f; /* outside [0, 1] */
+    assert_int_equal(loadid_est_set_measured(est, share), -EINVAL);
+    assert_true(loadid_est_config(est)->col_measured[3] == 0);
+    share[3] = 0.5f;
+    assert_int_equal(loadid_est_set_measured(est, share), 0);
+    assert_true(loadid_est_config(est)->col_measured[3] == (loadid_real_t)0.5);
+    loadid_est_destroy(est);
+    dataset_free(&d);
+}
+
 /* TLS on noisy accelerometer columns (4 times the paper's noise, so TLS
  * removes a large share), weighted for that noise and for 1.6 times it:
  * fitting weights leave the coverage in the band; weights that do not fit
@@ -979,6 +1027,7 @@ int main(void) {
         cmocka_unit_test(test_tls_coverage_noise_in_a),
         cmocka_unit_test(test_riv_coverage_noise_in_a),
         cmocka_unit_test(test_ls_counts_the_bias_of_noisy_columns),
+        cmocka_unit_test(test_ls_counts_the_measured_share_of_exact_columns),
         cmocka_unit_test(test_tls_counts_weights_that_do_not_fit),
         cmocka_unit_test(test_drift_fitted_coverage),
         cmocka_unit_test(test_zeroing_noise_refused),

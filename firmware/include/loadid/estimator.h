@@ -99,6 +99,13 @@ typedef struct {
      * look excited. n_params + 1 entries (the last, the wrench column's,
      * is ignored). Default 1. */
     loadid_real_t col_exact[LOADID_MAX_PARAMS + 1];
+    /* Of a column counted exact (col_exact != 1), the share of its noise
+     * variance that is a measurement's (the accelerometer's a - g beside
+     * the joint filter's alpha in m c's columns with signals mixed), in
+     * [0, 1]: least squares' phi_std counts that share's bias exactly, as
+     * a noisy column's (loadid_est_uncertainty), the rest to first order.
+     * Covariance only. Default 0. */
+    loadid_real_t col_measured[LOADID_MAX_PARAMS + 1];
     /* n_params 10: the covariance of the error of the zeroing offset y0
      * subtracted from every wrench (eq. 7), 6 x 6 row-major [N^2, N Nm,
      * Nm^2]: the noise of the zeroing window's mean. One error shared by
@@ -180,6 +187,11 @@ int loadid_est_set_weights(loadid_est_t *est, const loadid_real_t row_sigma[6],
  * reset, as loadid_est_set_weights. Returns 0, or -EINVAL (NULL, or a
  * value not finite and > 0: nothing changed). */
 int loadid_est_set_exact(loadid_est_t *est, const loadid_real_t *col_exact);
+
+/* New col_measured (see loadid_est_config_t; n_params + 1 entries); no
+ * reset. Returns 0, or -EINVAL (NULL, or a value outside [0, 1]: nothing
+ * changed). */
+int loadid_est_set_measured(loadid_est_t *est, const loadid_real_t *col_measured);
 
 /* New offset_cov (see loadid_est_config_t; 36 values, symmetric, with a
  * non-negative diagonal), kept through resets; no reset. The pipeline sets

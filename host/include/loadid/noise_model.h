@@ -144,7 +144,9 @@ void loadid_noise_combine(const loadid_config_t *cfg, int jr3_spec, int jr3_alph
  * the joint filter (LOADID_NOISE_FILTER) enters a thousandth of itself,
  * so its columns count as exact (noise_model.c says why), and col_exact
  * says by how much each column's weight exceeds its noise's (for the
- * excitation gates; set it with loadid_est_set_exact). */
+ * excitation gates; set it with loadid_est_set_exact), col_measured the
+ * share of each column's noise variance from the measured sources (for
+ * least squares' phi_std; loadid_est_set_measured). */
 int loadid_noise_weights(const loadid_noise_levels_t *lv, double omega_typical,
                          loadid_est_config_t *est);
 

@@ -307,9 +307,22 @@ int loadid_noise_weights(const loadid_noise_levels_t *lv, double omega_typical,
         rc = loadid_est_weights_from_noise(est, (loadid_real_t)lv->force, (loadid_real_t)lv->torque,
                                            (loadid_real_t)col[0], (loadid_real_t)col[1],
                                            (loadid_real_t)col[2], (loadid_real_t)omega_typical);
+    /* The measurements' part alone (the filter's sources at a trace):
+     * each column's noise variance goes as 1 / weight^2. */
+    loadid_est_config_t measured = *est;
+    double meas[3] = {lv->spec, lv->alpha, lv->omega};
+    for (int i = 0; i < 3; ++i)
+        if (lv->source[2 + i] == LOADID_NOISE_FILTER) meas[i] *= 1e-9;
+    if (rc == 0)
+        rc = loadid_est_weights_from_noise(
+            &measured, (loadid_real_t)lv->force, (loadid_real_t)lv->torque, (loadid_real_t)meas[0],
+            (loadid_real_t)meas[1], (loadid_real_t)meas[2], (loadid_real_t)omega_typical);
     if (rc != 0) return rc;
-    for (int j = 0; j <= est->n_params; ++j)
+    for (int j = 0; j <= est->n_params; ++j) {
         est->col_exact[j] = est->col_weight[j] / noise.col_weight[j];
+        const double share = pow((double)noise.col_weight[j] / (double)measured.col_weight[j], 2);
+        est->col_measured[j] = (loadid_real_t)(j < LOADID_NPHI ? fmin(share, 1.0) : 0.0);
+    }
     return 0;
 }
 

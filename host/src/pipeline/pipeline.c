@@ -981,8 +981,9 @@ static void apply_measured_noise(loadid_pipeline_t *p) {
         if (m == p->refined_m) continue; /* weighted by its own run */
         loadid_est_config_t e = *loadid_est_config(p->est[m]);
         if (loadid_noise_weights(&p->levels, p->cfg.omega_typical, &e) == 0 &&
-            loadid_est_set_weights(p->est[m], e.row_sigma, e.col_weight) == 0)
-            loadid_est_set_exact(p->est[m], e.col_exact);
+            loadid_est_set_weights(p->est[m], e.row_sigma, e.col_weight) == 0 &&
+            loadid_est_set_exact(p->est[m], e.col_exact) == 0)
+            loadid_est_set_measured(p->est[m], e.col_measured);
     }
     /* With the offset estimated no zeroing window sets the wrench noise
      * measured apart (set_zeroing_noise); the channels' levels are that
