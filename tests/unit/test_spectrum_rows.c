@@ -207,6 +207,7 @@ static void test_bands_are_the_dft_of_the_rows(void **state) {
             for (int i = 0; i < 121; ++i) diff[i] = again[i] - bands.gram[b][g][i];
             assert_true(frobenius(diff, 121) <= 1e-12 * frobenius(bands.gram[b][g], 121));
         }
+    loadid_spectrum_rows_destroy(rows);
 }
 
 /* Over DRAWS draws, least squares' and RIV's z = (phi - phi_true) / std
