@@ -292,31 +292,29 @@ void loadid_noise_combine(const loadid_config_t *cfg, int jr3_spec, int jr3_alph
  * REFINED's row levels count it. A configured level is used as given. */
 #define FILTER_EXACT_SCALE 1e-3
 
-int loadid_noise_weights(const loadid_noise_levels_t *lv, double omega_typical,
-                         loadid_est_config_t *est) {
+/* loadid_est_weights_from_noise into out with the joint filter's levels
+ * times filter_scale (1: every level as measured). */
+static int weights_scaled(const loadid_noise_levels_t *lv, double omega_typical,
+                          double filter_scale, loadid_est_config_t *out) {
     double col[3] = {lv->spec, lv->alpha, lv->omega};
     for (int i = 0; i < 3; ++i)
-        if (lv->source[2 + i] == LOADID_NOISE_FILTER) col[i] *= FILTER_EXACT_SCALE;
-    /* The noise's own weights first, for col_exact (the excitation gates
-     * use those: exactness must not make weak data look excited). */
-    loadid_est_config_t noise = *est;
-    int rc = loadid_est_weights_from_noise(
-        &noise, (loadid_real_t)lv->force, (loadid_real_t)lv->torque, (loadid_real_t)lv->spec,
-        (loadid_real_t)lv->alpha, (loadid_real_t)lv->omega, (loadid_real_t)omega_typical);
-    if (rc == 0)
-        rc = loadid_est_weights_from_noise(est, (loadid_real_t)lv->force, (loadid_real_t)lv->torque,
-                                           (loadid_real_t)col[0], (loadid_real_t)col[1],
-                                           (loadid_real_t)col[2], (loadid_real_t)omega_typical);
-    /* The measurements' part alone (the filter's sources at a trace):
-     * each column's noise variance goes as 1 / weight^2. */
-    loadid_est_config_t measured = *est;
-    double meas[3] = {lv->spec, lv->alpha, lv->omega};
-    for (int i = 0; i < 3; ++i)
-        if (lv->source[2 + i] == LOADID_NOISE_FILTER) meas[i] *= 1e-9;
-    if (rc == 0)
-        rc = loadid_est_weights_from_noise(
-            &measured, (loadid_real_t)lv->force, (loadid_real_t)lv->torque, (loadid_real_t)meas[0],
-            (loadid_real_t)meas[1], (loadid_real_t)meas[2], (loadid_real_t)omega_typical);
+        if (lv->source[2 + i] == LOADID_NOISE_FILTER) col[i] *= filter_scale;
+    return loadid_est_weights_from_noise(out, (loadid_real_t)lv->force, (loadid_real_t)lv->torque,
+                                         (loadid_real_t)col[0], (loadid_real_t)col[1],
+                                         (loadid_real_t)col[2], (loadid_real_t)omega_typical);
+}
+
+int loadid_noise_weights(const loadid_noise_levels_t *lv, double omega_typical,
+                         loadid_est_config_t *est) {
+    /* The noise's own weights (for col_exact: the excitation gates use
+     * those, so exactness does not make weak data look excited), the
+     * measurements' part alone (the filter's sources at a trace: each
+     * column's noise variance goes as 1 / weight^2, for col_measured), and
+     * the estimator's. */
+    loadid_est_config_t noise = *est, measured = *est;
+    int rc = weights_scaled(lv, omega_typical, 1, &noise);
+    if (rc == 0) rc = weights_scaled(lv, omega_typical, 1e-9, &measured);
+    if (rc == 0) rc = weights_scaled(lv, omega_typical, FILTER_EXACT_SCALE, est);
     if (rc != 0) return rc;
     for (int j = 0; j <= est->n_params; ++j) {
         est->col_exact[j] = est->col_weight[j] / noise.col_weight[j];
