@@ -69,20 +69,36 @@ extern "C" int loadid_load_model(const loadid_real_t estimate[10], const loadid_
     if (!(m > 0)) {
         // No positive mass: no body has this phi. The model is no load.
         out->projected = 1;
+        for (int g = 0; g < 3; ++g) out->why[g] = LOADID_WHY_NO_MASS;
         loadid_phi_to_physical(out->phi, &out->physical);
         return 0;
     }
     // NaN std (a failed covariance) compares false: not identified.
     const auto within = [](Real s, Real bound) { return s <= bound; };
+    // A group that fails: why, and by how much.
+    const auto fail = [out](int group, int why, Real over) {
+        out->why[group] = why;
+        out->over[group] = over;
+    };
     const Vec3 c = Vec3(estimate[1], estimate[2], estimate[3]) / m;
     int id = 0;
-    if (within(std[0], cfg->mass_rel_std * m)) id |= LOADID_IDENT_MASS;
-    bool com_ok = (id & LOADID_IDENT_MASS) != 0;
-    for (int i = 0; i < 3 && com_ok; ++i) {
-        const Real sc = std::sqrt(std[1 + i] * std[1 + i] + c(i) * c(i) * std[0] * std[0]) / m;
-        com_ok = within(sc, cfg->com_std);
+    if (within(std[0], cfg->mass_rel_std * m))
+        id |= LOADID_IDENT_MASS;
+    else
+        fail(0, LOADID_WHY_STD, std[0] / (cfg->mass_rel_std * m));
+    if (id & LOADID_IDENT_MASS) {
+        Real worst = 0;
+        for (int i = 0; i < 3; ++i) {
+            const Real sc = std::sqrt(std[1 + i] * std[1 + i] + c(i) * c(i) * std[0] * std[0]) / m;
+            worst = std::isnan(sc) ? sc : std::max(worst, sc);
+        }
+        if (within(worst, cfg->com_std))
+            id |= LOADID_IDENT_COM;
+        else
+            fail(1, LOADID_WHY_STD, worst / cfg->com_std);
+    } else {
+        fail(1, LOADID_WHY_NEEDS, 0);
     }
-    if (com_ok) id |= LOADID_IDENT_COM;
 
     const Mat3 Is = sym3(estimate + 4);
     const Mat3 pa = c.squaredNorm() * Mat3::Identity() - c * c.transpose();
@@ -95,10 +111,16 @@ extern "C" int loadid_load_model(const loadid_real_t estimate[10], const loadid_
         const Real scale =
             std::max(Ic_cons.trace() / Real(3), sphere_moment(m, cfg->fallback_density));
         const Real gyration = std::sqrt(std::max(Ic_cons.trace(), Real(0)) / (Real(2) * m));
-        const bool stands_out = !snr || snr[2] >= cfg->min_snr;
-        if (within(smax, cfg->inertia_rel_std * scale) && gyration <= cfg->max_gyration &&
-            stands_out)
+        if (!within(smax, cfg->inertia_rel_std * scale))
+            fail(2, LOADID_WHY_STD, smax / (cfg->inertia_rel_std * scale));
+        else if (!(gyration <= cfg->max_gyration))
+            fail(2, LOADID_WHY_GYRATION, gyration / cfg->max_gyration);
+        else if (snr && !(snr[2] >= cfg->min_snr))
+            fail(2, LOADID_WHY_SNR, cfg->min_snr / snr[2]);
+        else
             id |= LOADID_IDENT_INERTIA;
+    } else {
+        fail(2, LOADID_WHY_NEEDS, 0);
     }
     out->identified = id;
 

@@ -171,11 +171,21 @@ static void test_groups_and_bad_input(void **state) {
     std[1] = 0.006;
     assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, LOADID_IDENT_MASS);
+    /* Why: c_x's std, sqrt(std(m c_x)^2 + c_x^2 std(m)^2) / m, over 5 mm;
+     * the inertia for want of the COM. */
+    assert_int_equal(m.why[0], LOADID_WHY_IDENTIFIED);
+    assert_int_equal(m.why[1], LOADID_WHY_STD);
+    assert_true(fabs(m.over[1] - hypot(0.006, 0.02 * std[0]) / 0.005) < 1e-12);
+    assert_int_equal(m.why[2], LOADID_WHY_NEEDS);
     /* mass std 6 % > 5 %: nothing. */
     small_std(phi, std);
     std[0] = 0.06;
     assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, 0);
+    assert_int_equal(m.why[0], LOADID_WHY_STD);
+    assert_true(fabs(m.over[0] - 0.06 / 0.05) < 1e-12);
+    assert_int_equal(m.why[1], LOADID_WHY_NEEDS);
+    assert_int_equal(m.why[2], LOADID_WHY_NEEDS);
     /* Inertia: its largest element std against 15 % of the inertia's
      * scale, the mean principal moment about the COM (tr(I_C) / 3 =
      * m (a^2 + b^2 + c^2) / 18 for the box) or the aluminium sphere's if
@@ -189,17 +199,23 @@ static void test_groups_and_bad_input(void **state) {
         assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
         assert_int_equal(m.identified,
                          LOADID_IDENT_MASS | LOADID_IDENT_COM | (k ? 0 : LOADID_IDENT_INERTIA));
+        assert_int_equal(m.why[2], k ? LOADID_WHY_STD : LOADID_WHY_IDENTIFIED);
+        if (k) assert_true(fabs(m.over[2] - 0.16 / 0.15) < 1e-9);
     }
     /* NaN std: not identified, never a crash. */
     small_std(phi, std);
     std[7] = NAN;
     assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, LOADID_IDENT_MASS | LOADID_IDENT_COM);
+    assert_int_equal(m.why[2], LOADID_WHY_STD);
+    assert_true(isnan(m.over[2]));
     /* Too little torque from the inertia (a slow motion): not identified. */
     const loadid_real_t weak[3] = {100, 50, 0.9}, strong[3] = {100, 50, 1.1};
     small_std(phi, std);
     assert_int_equal(loadid_load_model(phi, std, weak, &cfg, &m), 0);
     assert_int_equal(m.identified, LOADID_IDENT_MASS | LOADID_IDENT_COM);
+    assert_int_equal(m.why[2], LOADID_WHY_SNR);
+    assert_true(fabs(m.over[2] - 1 / 0.9) < 1e-12);
     assert_int_equal(loadid_load_model(phi, std, strong, &cfg, &m), 0);
     assert_int_equal(m.identified, LOADID_IDENT_MASS | LOADID_IDENT_COM | LOADID_IDENT_INERTIA);
     /* An inertia 10 m in gyration radius is no wrist load. */
@@ -210,12 +226,18 @@ static void test_groups_and_bad_input(void **state) {
     small_std(huge, std);
     assert_int_equal(loadid_load_model(huge, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, LOADID_IDENT_MASS | LOADID_IDENT_COM);
+    /* Its radius sqrt(tr(I_C) / 2m), I_C by the parallel-axis theorem. */
+    const double c2 = com[0] * com[0] + com[1] * com[1] + com[2] * com[2];
+    const double trace_c = (double)(huge[4] + huge[7] + huge[9]) - 2 * 1.0 * c2;
+    assert_int_equal(m.why[2], LOADID_WHY_GYRATION);
+    assert_true(fabs(m.over[2] - sqrt(trace_c / 2) / 0.5) < 1e-9);
     /* No positive mass: no load. */
     loadid_real_t neg[10];
     memcpy(neg, phi, sizeof neg);
     neg[0] = -0.2;
     assert_int_equal(loadid_load_model(neg, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, 0);
+    for (int g = 0; g < 3; ++g) assert_int_equal(m.why[g], LOADID_WHY_NO_MASS);
     assert_int_equal(m.projected, 1);
     for (int i = 0; i < 10; ++i) assert_true(m.phi[i] == 0);
     /* Bad arguments. */

@@ -33,7 +33,10 @@
  *     r = (3 m / (4 pi rho))^(1/3), which is consistent, small and never
  *     the wild value of a badly excited estimate.
  * projected is set when the model phi differs from the estimate by more
- * than rounding.
+ * than rounding. For each group not identified, why (the first test it
+ * failed, in the order above) and by how much (over: the tested value
+ * over its bound, or the bound over snr[2]; 0 for a missing prerequisite
+ * or no positive mass; NaN for a std that is not a number).
  */
 #ifndef LOADID_LOAD_MODEL_H
 #define LOADID_LOAD_MODEL_H
@@ -48,6 +51,16 @@ extern "C" {
 /* Bits of identified: load_model_t's constants. */
 enum { LOADID_IDENT_MASS = 1, LOADID_IDENT_COM = 2, LOADID_IDENT_INERTIA = 4 };
 
+/* Why a group is not identified (why[] of loadid_load_model_t). */
+typedef enum {
+    LOADID_WHY_IDENTIFIED = 0,
+    LOADID_WHY_NO_MASS,  /* m <= 0: no load */
+    LOADID_WHY_STD,      /* its std over the bound (over: std / bound) */
+    LOADID_WHY_NEEDS,    /* COM without the mass, inertia without the COM */
+    LOADID_WHY_GYRATION, /* radius of gyration over max_gyration (over: r / max) */
+    LOADID_WHY_SNR       /* its torque under min_snr times the noise (over: min_snr / snr) */
+} loadid_ident_why_t;
+
 typedef struct {
     loadid_real_t mass_rel_std;     /* [-], default 0.05 */
     loadid_real_t com_std;          /* [m], default 0.005 */
@@ -60,6 +73,8 @@ typedef struct {
 typedef struct {
     int identified;             /* LOADID_IDENT_* bits */
     int projected;              /* phi differs from the estimate */
+    int why[3];                 /* mass, COM, inertia: loadid_ident_why_t */
+    loadid_real_t over[3];      /* how far the failed test is over its bound */
     loadid_real_t phi[10];      /* physically consistent (eq. 5) */
     loadid_physical_t physical; /* mass, COM, inertia about the COM of phi */
 } loadid_load_model_t;

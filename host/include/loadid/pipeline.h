@@ -80,6 +80,9 @@ typedef struct {
     double noise_scale;   /* a-posteriori noise scale s (1: the
                                      weights' noise levels fit the data) */
     int identified;       /* LOADID_IDENT_* bits (load_model.h) */
+    int ident_why[3];     /* mass, COM, inertia: why not identified
+                                     (loadid_ident_why_t; loadid_pipeline_why_not) */
+    double ident_over[3]; /* how far its failed test is over the bound */
     int projected;        /* model_phi differs from phi */
     double model_phi[10]; /* physically consistent (load_model.h) */
     double snr[3];        /* mass, m c, inertia: how far each stands out
@@ -269,6 +272,13 @@ const loadid_config_t *loadid_pipeline_config(const loadid_pipeline_t *p);
 
 /* Whether START was ever seen since create or RESET. */
 int loadid_pipeline_started(const loadid_pipeline_t *p);
+
+/* Why a final estimate's group (0 mass, 1 COM, 2 inertia) is not
+ * identified, in words, into out (at most len bytes): "no estimate" when
+ * e is not valid (e->why says why), "" when the group is identified or a
+ * valid e has no load model (not final). Returns 1 when it wrote a
+ * reason, else 0. */
+int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char *out, size_t len);
 
 #ifdef __cplusplus
 }

@@ -61,6 +61,22 @@ static void levels(FILE *out, const loadid_noise_levels_t *l) {
     fputc('}', out);
 }
 
+/* {group: why} for each group e does not identify. */
+static void not_identified(FILE *out, const loadid_pipeline_estimate_t *e) {
+    fputc('{', out);
+    const char *sep = "";
+    for (int g = 0; g < 3; ++g) {
+        char why[160];
+        if (!loadid_pipeline_why_not(e, g, why, sizeof why)) continue;
+        fputs(sep, out);
+        string(out, loadid_ident_name(1 << g));
+        fputs(": ", out);
+        string(out, why);
+        sep = ", ";
+    }
+    fputc('}', out);
+}
+
 int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, int n,
                              const loadid_pipeline_status_t *st,
                              const loadid_refined_report_t *ref) {
@@ -110,6 +126,8 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
         fputs(", \"snr\": ", out);
         const double none3[3] = {NAN, NAN, NAN};
         array(out, model ? e->snr : none3, 3);
+        fputs(",\n   \"not_identified\": ", out);
+        not_identified(out, e);
         fputs(", \"model\": {\"mass\": ", out);
         number(out, e->model_mass);
         fputs(", \"com\": ", out);

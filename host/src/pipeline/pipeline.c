@@ -343,6 +343,7 @@ static void model_of(loadid_pipeline_t *p, int m, const loadid_real_t *std, load
     e->noise_scale = (double)scale;
     for (int i = 0; i < 10; ++i) e->phi_std[i] = (double)std[i];
     e->identified = lm.identified;
+    for (int g = 0; g < 3; ++g) e->ident_why[g] = lm.why[g], e->ident_over[g] = (double)lm.over[g];
     e->projected = lm.projected;
     for (int i = 0; i < 10; ++i) e->model_phi[i] = (double)lm.phi[i];
     e->model_mass = (double)lm.physical.mass;
@@ -529,6 +530,21 @@ static void take_refined(loadid_pipeline_t *p) {
     fill_row(p, e);
 }
 
+/* A final estimate's groups not identified, and why, in one line. */
+static void note_unidentified(loadid_pipeline_t *p, const loadid_pipeline_estimate_t *e) {
+    char line[400] = "", why[160];
+    size_t used = 0;
+    for (int g = 0; g < 3 && used < sizeof line; ++g) {
+        if (!loadid_pipeline_why_not(e, g, why, sizeof why)) continue;
+        const int n = snprintf(line + used, sizeof line - used, "%s%s (%s)", used ? "; " : "",
+                               loadid_ident_name(1 << g), why);
+        if (n < 0) return;
+        used += (size_t)n;
+    }
+    if (used)
+        note(p, "%s: not identified: %s", loadid_method_name((loadid_method_t)e->method), line);
+}
+
 static void publish_all(loadid_pipeline_t *p, int final) {
     for (int m = 0; m < p->num_methods; ++m) {
         /* REFINED has an estimate only once the window has ended (and,
@@ -538,6 +554,7 @@ static void publish_all(loadid_pipeline_t *p, int final) {
             take_refined(p);
         else
             estimate_of(p, m, &p->latest[m], final);
+        if (final) note_unidentified(p, &p->latest[m]);
         if (p->sink.estimate) p->sink.estimate(p->sink.ctx, &p->latest[m]);
     }
 }
@@ -921,6 +938,7 @@ static void collect_refined(loadid_pipeline_t *p) {
     refined_noted(p);
     if (p->state != LOADID_STATE_DONE) return;
     take_refined(p);
+    note_unidentified(p, &p->latest[p->refined_m]);
     if (p->sink.estimate) p->sink.estimate(p->sink.ctx, &p->latest[p->refined_m]);
     choose_primary(p);
 }
