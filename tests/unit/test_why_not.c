@@ -19,6 +19,7 @@ static loadid_pipeline_estimate_t final_estimate(int group, int why, double over
     loadid_pipeline_estimate_t e;
     memset(&e, 0, sizeof e);
     e.valid = e.has_model = 1;
+    e.identified = (LOADID_IDENT_MASS | LOADID_IDENT_COM | LOADID_IDENT_INERTIA) & ~(1 << group);
     e.ident_why[group] = why;
     e.ident_over[group] = over;
     return e;
@@ -78,6 +79,13 @@ static void test_no_estimate_and_no_model(void **state) {
     assert_int_equal(loadid_pipeline_why_not(&e, 3, out, sizeof out), 0);
     assert_int_equal(loadid_pipeline_why_not(NULL, 0, out, sizeof out), 0);
     assert_int_equal(loadid_pipeline_why_not(&e, 0, out, 0), 0);
+    /* A restored result keeps the groups, not the reasons. */
+    memset(&e, 0, sizeof e);
+    e.valid = e.has_model = 1;
+    e.identified = LOADID_IDENT_MASS;
+    assert_int_equal(loadid_pipeline_why_not(&e, 0, out, sizeof out), 0);
+    assert_int_equal(loadid_pipeline_why_not(&e, 1, out, sizeof out), 1);
+    assert_string_equal(out, "not identified (no reason kept)");
 }
 
 int main(void) {

@@ -275,9 +275,10 @@ int loadid_pipeline_started(const loadid_pipeline_t *p);
 
 /* Why a final estimate's group (0 mass, 1 COM, 2 inertia) is not
  * identified, in words, into out (at most len bytes): "no estimate" when
- * e is not valid (e->why says why), "" when the group is identified or a
- * valid e has no load model (not final). Returns 1 when it wrote a
- * reason, else 0. */
+ * e is not valid (e->why says why), "" when the group is identified
+ * (e->identified) or a valid e has no load model (not final); a group
+ * without a reason kept (a restored result) says so. Returns 1 when it
+ * wrote a reason, else 0. */
 int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char *out, size_t len);
 
 #ifdef __cplusplus

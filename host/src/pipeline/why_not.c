@@ -13,7 +13,7 @@ int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char
         snprintf(out, len, "no estimate");
         return 1;
     }
-    if (!e->has_model) return 0;
+    if (!e->has_model || (e->identified & (1 << group))) return 0;
     static const char *const needs[3] = {"", "needs the mass", "needs the com"};
     const double over = e->ident_over[group];
     switch (e->ident_why[group]) {
@@ -40,8 +40,9 @@ int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char
                      "as on slow or mostly translational motion",
                      over);
             break;
-        default:
-            return 0;
+        default: /* not kept: a result restored from its saved YAML */
+            snprintf(out, len, "not identified (no reason kept)");
+            break;
     }
     return 1;
 }
