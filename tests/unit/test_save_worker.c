@@ -8,6 +8,8 @@
  *    a reader) does not hold up submit: it returns at once, until the
  *    ring is full, which it says (-EBUSY) instead of waiting; once the
  *    disk moves on, what waited is saved.
+ * A load model's groups not identified are said why in comments, and the
+ * file reads back.
  * The loop's side making no file-system call in a real session is
  * tests/python/test_systemd_unit.py's.
  */
@@ -27,6 +29,7 @@
 #include <cmocka.h>
 
 #include "loadid/estimator.h"
+#include "loadid/load_model.h"
 #include "loadid/regressor.h"
 #include "save_worker.h"
 #include "saved_result.h"
@@ -111,6 +114,35 @@ static void zeroing_regressor_defaults_to_rest(void **state) {
     loadid_real_t a[60];
     assert_int_equal(loadid_regressor(spec, zero, zero, a), 0);
     for (int i = 0; i < 60; ++i) assert_true(cback.zero_a[i] == (double)a[i]);
+}
+
+/* A load model's groups not identified are said why in comments, for
+ * people; the file reads back with the groups it identified. */
+static void unidentified_groups_are_commented(void **state) {
+    (void)state;
+    loadid_pipeline_estimate_t e, back;
+    loadid_pipeline_compensation_t c, cback;
+    estimate(6, &e, &c);
+    e.has_model = 1;
+    e.identified = LOADID_IDENT_MASS;
+    e.ident_why[1] = LOADID_WHY_STD, e.ident_over[1] = 1.2;
+    e.ident_why[2] = LOADID_WHY_NEEDS;
+    for (int i = 0; i < 10; ++i) e.model_phi[i] = e.phi[i];
+    char path[256], err[512], text[8192];
+    assert_int_equal(loadid_saved_result_write(g_dir, &e, &c, path, sizeof path, err, sizeof err),
+                     0);
+    FILE *in = fopen(path, "r");
+    assert_non_null(in);
+    const size_t n = fread(text, 1, sizeof text - 1, in);
+    fclose(in);
+    text[n] = '\0';
+    assert_non_null(strstr(text,
+                           "  identified: [mass]\n"
+                           "  # com not identified: phi_std 1.2 times its bound\n"
+                           "  # inertia not identified: needs the com\n"));
+    assert_null(strstr(text, "# mass not identified"));
+    assert_int_equal(loadid_saved_result_read(path, &back, &cback, err, sizeof err), 0);
+    assert_int_equal(back.identified, LOADID_IDENT_MASS);
 }
 
 static void saves_in_order(void **state) {
@@ -209,6 +241,7 @@ int main(void) {
         cmocka_unit_test_setup_teardown(failure_comes_back_as_the_reason, make_dir, remove_dir),
         cmocka_unit_test_setup_teardown(stalled_disk_does_not_hold_up_submit, make_dir, remove_dir),
         cmocka_unit_test_setup_teardown(zeroing_regressor_defaults_to_rest, make_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(unidentified_groups_are_commented, make_dir, remove_dir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

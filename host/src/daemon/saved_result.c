@@ -58,7 +58,14 @@ static void format_model(doc_t *d, const loadid_pipeline_estimate_t *e) {
             add(d, "%s%s", first ? "" : ", ", loadid_ident_name(bit));
             first = 0;
         }
-    add(d, "]\n  projected: %s\n  phi: ", e->projected ? "true" : "false");
+    add(d, "]\n");
+    /* Why the others are not: for people (a comment, not read back). */
+    for (int g = 0; g < 3; ++g) {
+        char why[160];
+        if (loadid_pipeline_why_not(e, g, why, sizeof why))
+            add(d, "  # %s not identified: %s\n", loadid_ident_name(1 << g), why);
+    }
+    add(d, "  projected: %s\n  phi: ", e->projected ? "true" : "false");
     list(d, e->model_phi, 10);
     add(d, "\n  phi_std: ");
     list(d, e->phi_std, 10);
