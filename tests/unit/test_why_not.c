@@ -41,6 +41,7 @@ static void test_each_reason_in_words(void **state) {
         {2, LOADID_WHY_SNR, 1.0 / 0.9,
          "its torque stands out of the noise 1.11 times less than the bound, as on slow or "
          "mostly translational motion"},
+        {2, LOADID_WHY_SNR, INFINITY, "its torque does not stand out of the noise at all"},
         {0, LOADID_WHY_NO_MASS, 0, "no positive mass"},
     };
     char out[160];
@@ -79,6 +80,7 @@ static void test_no_estimate_and_no_model(void **state) {
     assert_int_equal(loadid_pipeline_why_not(&e, 3, out, sizeof out), 0);
     assert_int_equal(loadid_pipeline_why_not(NULL, 0, out, sizeof out), 0);
     assert_int_equal(loadid_pipeline_why_not(&e, 0, out, 0), 0);
+    assert_int_equal(loadid_pipeline_why_not(&e, 0, NULL, sizeof out), 0);
     /* A restored result keeps the groups, not the reasons. */
     memset(&e, 0, sizeof e);
     e.valid = e.has_model = 1;

@@ -7,8 +7,9 @@
 #include <stdio.h>
 
 int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char *out, size_t len) {
-    if (len > 0) out[0] = '\0';
-    if (!e || group < 0 || group > 2 || len == 0) return 0;
+    if (!out || len == 0) return 0;
+    out[0] = '\0';
+    if (!e || group < 0 || group > 2) return 0;
     if (!e->valid) {
         snprintf(out, len, "no estimate");
         return 1;
@@ -35,6 +36,10 @@ int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char
             snprintf(out, len, "radius of gyration %.3g times its bound", over);
             break;
         case LOADID_WHY_SNR:
+            if (!isfinite(over)) {
+                snprintf(out, len, "its torque does not stand out of the noise at all");
+                break;
+            }
             snprintf(out, len,
                      "its torque stands out of the noise %.3g times less than the bound, "
                      "as on slow or mostly translational motion",
