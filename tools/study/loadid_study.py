@@ -940,6 +940,9 @@ def method_row(r: dict, truth) -> dict:
                 row[f"z{i}"] = float((phi[i] - truth[i]) / s) if s > 0 else ""
     ident = r.get("identified") or []
     row["identified"] = "+".join(ident)
+    # Why the others are not (loadidd's words), "group: why" joined by "; ".
+    row["not_identified"] = "; ".join(f"{g}: {w}" for g, w in
+                                      (r.get("not_identified") or {}).items())
     row["inertia_identified"] = int("inertia" in ident)
     row["projected"] = r.get("projected")
     row["noise_scale"] = r.get("noise_scale")
@@ -990,6 +993,7 @@ def summarise(rows, methods):
                     s["std_determined"] = 0.0 if ok else None
                 s["inertia_identified"] = (float(np.mean([r.get("inertia_identified", 0)
                                                           for r in ok])) if ok else None)
+                s["unidentified"] = unidentified_summary(ok)
                 s["incomplete"] = sum(1 for r in mr if r.get("complete") is False)
                 s["usable_s"] = usable_summary([r["usable_s"] for r in mr
                                                 if r.get("usable_s") is not None])
@@ -1008,6 +1012,42 @@ def summarise(rows, methods):
         {k: i for i, k in enumerate(NOISE_CELLS)}
     summary.sort(key=lambda e: (order[0][e["robot"]], order[1][e["load"]], order[2][e["noise"]]))
     return summary
+
+
+GROUP_OF = {"mass_pct": "mass", "com_mm": "com", "inertia_pct": "inertia"}
+
+
+def root_reason(reasons: dict, group: str):
+    """loadidd's reason a group is not identified, followed down the chain
+    of prerequisites ("needs the com" -> the COM's reason -> ...), numbers
+    replaced by R; "via GROUP: ..." when it is a prerequisite's."""
+    why, via = reasons.get(group), None
+    for _ in range(len(reasons)):   # a chain is at most mass <- com <- inertia
+        if not (why and why.startswith("needs the ") and why[10:] in reasons):
+            break
+        via = why[10:]
+        why = reasons[via]
+    if why is None:
+        return None
+    why = re.sub(r"\d[\d.e+-]*", "R", why)
+    return f"via {via}: {why}" if via else why
+
+
+def unidentified_summary(ok_rows):
+    """Per group: the share of the runs that did not identify it, and the
+    commonest of loadidd's reasons (root_reason)."""
+    out = {}
+    for g in GROUP_OF.values():
+        off = [r for r in ok_rows if g not in str(r.get("identified") or "").split("+")]
+        reasons = []
+        for r in off:
+            parts = [p.partition(": ") for p in str(r.get("not_identified") or "").split("; ")]
+            why = root_reason({name: w for name, _, w in parts if name}, g)
+            if why:
+                reasons.append(why)
+        out[g] = dict(share=len(off) / len(ok_rows) if ok_rows else None,
+                      why=max(sorted(set(reasons)), key=reasons.count) if reasons else None)
+    return out
 
 
 RATIO_BOOT = 2000   # bootstrap resamples of a cell's seeds for a ratio's interval
@@ -1047,7 +1087,8 @@ def target_checks(summary):
     over beyond it."""
     out = []
     for method, base, limit in TARGETS:
-        t = dict(method=method, base=base, limit=limit, checked=0, over_in_noise=[], over=[])
+        t = dict(method=method, base=base, limit=limit, checked=0, over_in_noise=[], over=[],
+                 flagged=[])
         for e in summary:
             s, b = e["methods"].get(method), e["methods"].get(base)
             if not s or not b:
@@ -1062,7 +1103,13 @@ def target_checks(summary):
                 ci = (s.get("ratio_ci90") or {}).get(base, {}).get(k)
                 item = dict(cell=f"{e['robot']}/{e['load']}/{e['noise']}", metric=k, ratio=r,
                             ci90=ci)
-                (t["over_in_noise"] if ci and ci[0] <= limit else t["over"]).append(item)
+                # Against RLS the target allows an excess that identified
+                # says: the group not identified (not claimed) in every run.
+                u = (s.get("unidentified") or {}).get(GROUP_OF[k]) or {}
+                if base == "RLS" and u.get("share") == 1:
+                    t["flagged"].append(dict(item, why=u.get("why")))
+                else:
+                    (t["over_in_noise"] if ci and ci[0] <= limit else t["over"]).append(item)
         if t["checked"]:
             out.append(t)
     return out
@@ -1072,10 +1119,20 @@ def targets_text(checks) -> str:
     lines = ["", "accuracy targets (median error over a cell's seeds against the base's; "
              "90 % interval by a paired bootstrap of the seeds)"]
     for t in checks:
+        flagged = t.get("flagged", [])
         n_over = len(t["over"]) + len(t["over_in_noise"])
         lines.append(f"  {t['method']} <= {t['limit']:g} x {t['base']}: met in "
-                     f"{t['checked'] - n_over} of {t['checked']}; over within the interval "
-                     f"{len(t['over_in_noise'])}; over beyond it {len(t['over'])}")
+                     f"{t['checked'] - n_over - len(flagged)} of {t['checked']}"
+                     + (f"; over but said (the group identified in no run) {len(flagged)}"
+                        if flagged else "")
+                     + f"; over within the interval {len(t['over_in_noise'])}; "
+                     f"over beyond it {len(t['over'])}")
+        said = {}
+        for i in flagged:
+            key = (GROUP_OF[i["metric"]], i.get("why"))
+            said[key] = said.get(key, 0) + 1
+        for (g, why), n in sorted(said.items(), key=lambda kv: (-kv[1], kv[0][0])):
+            lines.append(f"    said: {g} not identified ({why}) in {n} cell-metric(s)")
         for i in t["over"] + t["over_in_noise"]:
             ci = i["ci90"]
             lines.append(f"    {'OVER' if i in t['over'] else 'over'} {i['cell']} {i['metric']}: "
@@ -1243,7 +1300,7 @@ def table(summary, seeds) -> str:
 
 CSV_FIELDS = (["robot", "load", "noise", "seed", "sim_seed", "method", "ok", "error", "complete",
                "samples", "mass_pct", "com_mm", "inertia_pct", "model_mass_pct", "model_com_mm",
-               "model_inertia_pct", "identified", "inertia_identified", "projected", "noise_scale",
+               "model_inertia_pct", "identified", "not_identified", "inertia_identified", "projected", "noise_scale",
                "report_consistent", "usable_s"] + [f"cov{i}" for i in range(10)]
               + [f"z{i}" for i in range(10)] + [f"phi{i}" for i in range(10)]
               + ["noise_ratio", "sigma_f", "sigma_tau", "sigma_spec", "sigma_alpha", "saturated",
