@@ -57,6 +57,9 @@ void demo_est_fill(demo_est_t *e, const loadid_pipeline_estimate_t *p, const dou
         return;
     }
     e->consistent = p->physically_consistent;
+    e->identified = p->identified;
+    for (int g = 0; g < 3; ++g)
+        loadid_pipeline_why_not(p, g, e->not_identified[g], sizeof e->not_identified[g]);
     loadid_real_t t[10];
     for (int i = 0; i < 10; ++i) {
         e->phi[i] = p->phi[i];
@@ -354,4 +357,33 @@ int demo_write_runs(const char *dir, const demo_results_t *r) {
     const int bad = ferror(f);
     if (fclose(f) != 0 || bad) return -EIO;
     return 0;
+}
+
+void demo_print_claims(FILE *out, const demo_results_t *r, int k) {
+    const demo_source_t *s = &r->src[k];
+    for (int m = 0; m < DEMO_METHODS; ++m) {
+        char l[1024] = "";
+        int n[3] = {0, 0, 0}, first[3] = {-1, -1, -1}, runs = 0;
+        for (int j = 0; j < r->seeds; ++j) {
+            const demo_est_t *e = &s->est[j][m];
+            if (!e->valid) continue;
+            ++runs;
+            for (int g = 0; g < 3; ++g) {
+                if (e->identified & (1 << g))
+                    ++n[g];
+                else if (first[g] < 0)
+                    first[g] = j;
+            }
+        }
+        if (!runs) continue;
+        add(l, sizeof l, "mass %d/%d, COM %d/%d, inertia %d/%d", n[0], runs, n[1], runs, n[2],
+            runs);
+        for (int g = 0; g < 3; ++g) {
+            if (first[g] < 0) continue;
+            add(l, sizeof l, "; %s not (seed %llu: %s)", g == 1 ? "COM" : loadid_ident_name(1 << g),
+                (unsigned long long)(r->first_seed + (uint64_t)first[g]),
+                s->est[first[g]][m].not_identified[g]);
+        }
+        fprintf(out, "   %-9s %s\n", mname(r, m), l);
+    }
 }

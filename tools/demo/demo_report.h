@@ -30,6 +30,8 @@ typedef struct {
     double condition_number; /* dimensionless */
     double sigma_min;        /* TLS methods, dimensionless (noise-weighted) */
     int consistent;
+    int identified;             /* LOADID_IDENT_* bits of its load model */
+    char not_identified[3][96]; /* mass, COM, inertia: why not ("" when it is) */
 } demo_est_t;
 
 /* One signal source's runs. */
@@ -70,6 +72,10 @@ void demo_print_table(FILE *out, const demo_results_t *r, int k);
  * RTLS wins with every source), saying plainly where another method beat
  * RTLS. */
 void demo_print_verdicts(FILE *out, const demo_results_t *r, int k);
+
+/* What each method claimed (identified groups over the runs) and, for a
+ * group some run did not claim, the first such run's reason. */
+void demo_print_claims(FILE *out, const demo_results_t *r, int k);
 
 /* dir/runs.csv: a row per source, seed and method. Returns 0 or -errno. */
 int demo_write_runs(const char *dir, const demo_results_t *r);

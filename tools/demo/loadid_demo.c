@@ -571,6 +571,10 @@ int main(int argc, char **argv) {
             "(\"better on p/10 parameters (q/N runs)\": a lower median error on p parameters, a "
             "lower mean of the ten in q runs):\n");
         demo_print_verdicts(stdout, &res, k);
+        printf(
+            "   What each method claimed (identified in its load model, runs with an estimate) "
+            "and why not:\n");
+        demo_print_claims(stdout, &res, k);
     }
     if (!out) {
         printf("\nNo plots without --out DIR (bash tools/setup.sh demo writes build/demo).\n");
