@@ -80,6 +80,7 @@ typedef struct {
     double joint_spec, joint_alpha, joint_omega; /* from the joint filter; 0 if none */
     double correlation[2];                       /* lag-1 correlation of the force and the torque
                               noise in the zeroing window; 0 if none */
+    double tone_share[2], tone_hz[2];            /* a - g, alpha: loadid_noise_tone; 0 if none */
 } loadid_noise_levels_t;
 
 void loadid_noise_acc_reset(loadid_noise_acc_t *a);
@@ -120,6 +121,19 @@ int loadid_noise_acc_sigma(loadid_noise_acc_t *a, int min_still,
  * with fewer than 2 still samples or n_mean < 1 (cov zero). */
 int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double cov[36],
                             double rho[6]);
+
+/* How much of a channel group's noise in the still window is one tone (a
+ * structural vibration): the largest share of the variance of x, y and z
+ * together in one frequency bin of the window's first
+ * LOADID_NOISE_TONE_N samples (each less its mean, or its cubic when the
+ * load moved), and that bin's frequency. White noise spreads its variance
+ * over the n / 2 bins (the largest about 4 % at n = 256); a sinusoid puts
+ * nearly all of its own in one. group: 0 force, 1 torque, 2 a - g, 3 alpha;
+ * period_s: the samples' spacing. Returns 0, -EINVAL (a bad group or
+ * period), or -EAGAIN with fewer than 32 still samples (share, hz 0). */
+#define LOADID_NOISE_TONE_N 256
+int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, double *share,
+                      double *hz);
 
 /* The joint-derived levels at one pose: omega from the filter's qd error,
  * alpha and a - g from its qdd error through the kinematics (kin at q).

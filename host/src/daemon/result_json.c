@@ -58,6 +58,11 @@ static void levels(FILE *out, const loadid_noise_levels_t *l) {
     array(out, j, 3);
     fputs(", \"correlation\": ", out);
     array(out, l->correlation, 2);
+    fputs(", \"tone\": {\"share\": ", out);
+    array(out, l->tone_share, 2);
+    fputs(", \"hz\": ", out);
+    array(out, l->tone_hz, 2);
+    fputc('}', out);
     fputc('}', out);
 }
 

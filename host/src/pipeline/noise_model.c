@@ -8,6 +8,7 @@
 #define D3_MIN 100
 #define D3_GAIN 20.0 /* var(x_k - 3 x_k-1 + 3 x_k-2 - x_k-3) / sigma^2 = 1 + 9 + 9 + 1 */
 #define MAD_TO_SIGMA 1.482602218505602 /* 1 / Phi^-1(3/4): sigma of a normal from its MAD */
+#define TWO_PI 6.283185307179586
 
 void loadid_noise_acc_reset(loadid_noise_acc_t *a) {
     a->still_n = 0;
@@ -198,6 +199,41 @@ int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double 
     }
     for (int i = 0; i < 6; ++i)
         for (int j = 0; j < 6; ++j) cov[6 * i + j] = f[i] * f[j] * c[i][j] / dof / (double)n_mean;
+    return 0;
+}
+
+int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, double *share,
+                      double *hz) {
+    *share = *hz = 0;
+    if (group < 0 || group > 3 || !(period_s > 0)) return -EINVAL;
+    const int n = a->still_n < LOADID_NOISE_TONE_N ? a->still_n : LOADID_NOISE_TONE_N;
+    if (n < 32) return -EAGAIN;
+    double x[3][LOADID_NOISE_TONE_N], total = 0;
+    for (int c = 0; c < 3; ++c) {
+        double mean = 0;
+        for (int k = 0; k < n; ++k) mean += (x[c][k] = still_value(a, k, 3 * group + c)) / n;
+        for (int k = 0; k < n; ++k) x[c][k] -= mean, total += x[c][k] * x[c][k];
+    }
+    if (!(total > 0)) return 0;
+    /* Bin j (1 .. n/2 - 1) and its mirror hold 2 |X_j|^2 / n of the sum of
+     * squares (Parseval); the twiddles by recurrence from one rotation. */
+    int best = 0;
+    for (int j = 1; j < n / 2; ++j) {
+        const double step = -TWO_PI * j / n, cs = cos(step), sn = sin(step);
+        double power = 0;
+        for (int c = 0; c < 3; ++c) {
+            double re = 0, im = 0, wr = 1, wi = 0;
+            for (int k = 0; k < n; ++k) {
+                re += x[c][k] * wr, im += x[c][k] * wi;
+                const double t = wr * cs - wi * sn;
+                wi = wr * sn + wi * cs, wr = t;
+            }
+            power += re * re + im * im;
+        }
+        const double s = 2.0 * power / ((double)n * total);
+        if (s > *share) *share = s, best = j;
+    }
+    *hz = best / ((double)n * period_s);
     return 0;
 }
 

@@ -84,9 +84,11 @@ struct loadid_pipeline {
      * zero_g_n when the load moved. */
     int64_t zero_n, zero_g_n;
     double zero_sum[6], zero_g_sum[3], zero_a_sum[60];
-    double zero_g2_sum, zero_w2_sum; /* sum |g|^2, |omega|^2: did it move? */
-    int64_t zero_t_first_us;         /* the zeroing window's first sample */
-    double zero_t_sum;               /* and its samples' time after it, summed [us] */
+    double zero_g2_sum, zero_w2_sum;  /* sum |g|^2, |omega|^2: did it move? */
+    int64_t zero_t_first_us;          /* the zeroing window's first sample */
+    int64_t zero_t_last_us;           /* and its last */
+    double tone_share[2], tone_hz[2]; /* a - g, alpha (loadid_noise_tone at zeroing) */
+    double zero_t_sum;                /* and its samples' time after it, summed [us] */
     /* the wrench and time sums over the samples zero_a has (kinematics) */
     double zero_kin_sum[6], zero_kin_t_sum;
     double noise_corr[2]; /* the zeroing window's (set_zeroing_noise) */
@@ -652,6 +654,10 @@ static void refined_job(void *ctx) {
         p->drift_significant ? p->drift.t0_us : INT64_MIN, p->est[p->refined_m], &p->refined_rep);
     p->refined_rep.levels.correlation[0] = p->noise_corr[0]; /* its phi_std's too */
     p->refined_rep.levels.correlation[1] = p->noise_corr[1];
+    for (int c = 0; c < 2; ++c) {
+        p->refined_rep.levels.tone_share[c] = p->tone_share[c];
+        p->refined_rep.levels.tone_hz[c] = p->tone_hz[c];
+    }
     estimate_at(p, p->refined_m, &p->job_est, 1, 0, LOADID_STATE_DONE);
 }
 
@@ -779,7 +785,31 @@ static void set_zeroing_noise(loadid_pipeline_t *p) {
 #define ZERO_MOVED_G 5e-3
 #define ZERO_MOVED_W 5e-3
 
+/* A vibration in the accelerometer's noise (loadid_noise_tone), over the
+ * zeroing window's samples (period_s apart): reported, and said when
+ * the signals take the accelerometer's columns, whose TLS weights count
+ * their noise as white. */
+#define TONE_SAID 0.2 /* white noise's largest bin holds about 0.04 */
+static void measure_tones(loadid_pipeline_t *p, double period_s) {
+    static const char *const name[2] = {"a - g", "alpha"};
+    const int used[2] = {
+        p->cfg.signals == LOADID_SIGNALS_SENSOR || p->cfg.signals == LOADID_SIGNALS_MIXED,
+        p->cfg.signals == LOADID_SIGNALS_SENSOR};
+    for (int c = 0; c < 2; ++c) {
+        loadid_noise_tone(&p->noise, 2 + c, period_s, &p->tone_share[c], &p->tone_hz[c]);
+        if (used[c] && p->tone_share[c] >= TONE_SAID)
+            note(p,
+                 "warning: zeroing: %.0f %% of the accelerometer's %s noise is one tone at "
+                 "%.3g Hz (a vibration): the weights take it for white noise, and RTLS and "
+                 "TLS_BATCH on these columns may be biased by it (RIV and REFINED are not)",
+                 100 * p->tone_share[c], name[c], p->tone_hz[c]);
+    }
+}
+
 static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
+    const double period_s = p->zero_n > 1 ? (double)(p->zero_t_last_us - p->zero_t_first_us) *
+                                                1e-6 / (double)(p->zero_n - 1)
+                                          : 0.0;
     if (p->zero_n < MIN_ZEROING_SAMPLES) {
         char why[160];
         snprintf(why, sizeof why, "zeroing: %lld usable samples in the window (at least %d needed)",
@@ -835,6 +865,7 @@ static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
     }
     p->zeroed = 1;
     set_zeroing_noise(p);
+    measure_tones(p, period_s);
     set_state(p, utime, LOADID_STATE_IDLE, "");
 }
 
@@ -995,6 +1026,8 @@ static void apply_measured_noise(loadid_pipeline_t *p) {
     const int jr3_alpha = source == LOADID_SIGNALS_SENSOR;
     loadid_noise_combine(&p->cfg, jr3_spec, jr3_alpha, channel, src, js, ja, jw, &p->levels);
     p->levels.correlation[0] = p->noise_corr[0], p->levels.correlation[1] = p->noise_corr[1];
+    for (int c = 0; c < 2; ++c)
+        p->levels.tone_share[c] = p->tone_share[c], p->levels.tone_hz[c] = p->tone_hz[c];
     for (int m = 0; m < p->num_methods; ++m) {
         if (m == p->refined_m) continue; /* weighted by its own run */
         loadid_est_config_t e = *loadid_est_config(p->est[m]);
@@ -1077,6 +1110,8 @@ static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const c
                 return;
             }
             p->zero_n = p->zero_g_n = 0;
+            memset(p->tone_share, 0, sizeof p->tone_share);
+            memset(p->tone_hz, 0, sizeof p->tone_hz);
             memset(p->zero_sum, 0, sizeof p->zero_sum);
             memset(p->zero_g_sum, 0, sizeof p->zero_g_sum);
             memset(p->zero_a_sum, 0, sizeof p->zero_a_sum);
@@ -1254,6 +1289,7 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
         loadid_noise_acc_still(&p->noise, x);
         for (int i = 0; i < 6; ++i) p->zero_sum[i] += (double)y[i];
         if (p->zero_n == 0) p->zero_t_first_us = s->t_us;
+        p->zero_t_last_us = s->t_us;
         p->zero_t_sum += (double)(s->t_us - p->zero_t_first_us);
         p->zero_n++;
         loadid_kin_state_t k;
