@@ -211,7 +211,10 @@ int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, d
     double x[3][LOADID_NOISE_TONE_N], total = 0;
     for (int c = 0; c < 3; ++c) {
         double mean = 0;
-        for (int k = 0; k < n; ++k) mean += (x[c][k] = still_value(a, k, 3 * group + c)) / n;
+        for (int k = 0; k < n; ++k) {
+            x[c][k] = still_value(a, k, 3 * group + c);
+            mean += x[c][k] / n;
+        }
         for (int k = 0; k < n; ++k) x[c][k] -= mean, total += x[c][k] * x[c][k];
     }
     if (!(total > 0)) return 0;

@@ -84,15 +84,15 @@ struct loadid_pipeline {
      * zero_g_n when the load moved. */
     int64_t zero_n, zero_g_n;
     double zero_sum[6], zero_g_sum[3], zero_a_sum[60];
-    double zero_g2_sum, zero_w2_sum;  /* sum |g|^2, |omega|^2: did it move? */
-    int64_t zero_t_first_us;          /* the zeroing window's first sample */
-    int64_t zero_t_last_us;           /* and its last */
-    double tone_share[2], tone_hz[2]; /* a - g, alpha (loadid_noise_tone at zeroing) */
-    double zero_t_sum;                /* and its samples' time after it, summed [us] */
+    double zero_g2_sum, zero_w2_sum; /* sum |g|^2, |omega|^2: did it move? */
+    int64_t zero_t_first_us;         /* the zeroing window's first sample */
+    double zero_t_sum;               /* and its samples' time after it, summed [us] */
+    int64_t zero_t_last_us;          /* its last sample */
     /* the wrench and time sums over the samples zero_a has (kinematics) */
     double zero_kin_sum[6], zero_kin_t_sum;
-    double noise_corr[2]; /* the zeroing window's (set_zeroing_noise) */
-    int zeroed;           /* y0, g_init and zero_a are valid */
+    double noise_corr[2];             /* the zeroing window's (set_zeroing_noise) */
+    double tone_share[2], tone_hz[2]; /* a - g, alpha (measure_tones) */
+    int zeroed;                       /* y0, g_init and zero_a are valid */
     loadid_real_t y0[6], g_init[3];
     /* eq. (6) averaged over the zeroing window, what y0 holds of the load
      * (loadid_regressor_subtract_zeroing) */
@@ -532,6 +532,16 @@ static void take_refined(loadid_pipeline_t *p) {
     fill_row(p, e);
 }
 
+/* What the zeroing window measured of the noise beyond its levels (its
+ * lag-1 correlation, a tone in the accelerometer), into a report's l. */
+static void zeroing_figures(const loadid_pipeline_t *p, loadid_noise_levels_t *l) {
+    for (int c = 0; c < 2; ++c) {
+        l->correlation[c] = p->noise_corr[c];
+        l->tone_share[c] = p->tone_share[c];
+        l->tone_hz[c] = p->tone_hz[c];
+    }
+}
+
 /* A final estimate's groups not identified, and why, in one line. */
 static void note_unidentified(loadid_pipeline_t *p, const loadid_pipeline_estimate_t *e) {
     char line[400] = "", why[160];
@@ -652,12 +662,7 @@ static void refined_job(void *ctx) {
     p->job_rc = loadid_refined_run(
         p->refined, &p->cfg, p->has_accel, p->job_channel, p->job_src, p->zero_a, p->n_params,
         p->drift_significant ? p->drift.t0_us : INT64_MIN, p->est[p->refined_m], &p->refined_rep);
-    p->refined_rep.levels.correlation[0] = p->noise_corr[0]; /* its phi_std's too */
-    p->refined_rep.levels.correlation[1] = p->noise_corr[1];
-    for (int c = 0; c < 2; ++c) {
-        p->refined_rep.levels.tone_share[c] = p->tone_share[c];
-        p->refined_rep.levels.tone_hz[c] = p->tone_hz[c];
-    }
+    zeroing_figures(p, &p->refined_rep.levels); /* its phi_std's too */
     estimate_at(p, p->refined_m, &p->job_est, 1, 0, LOADID_STATE_DONE);
 }
 
@@ -807,6 +812,7 @@ static void measure_tones(loadid_pipeline_t *p, double period_s) {
 }
 
 static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {
+    /* The samples' spacing, before zero_n may become the kinematics' count. */
     const double period_s = p->zero_n > 1 ? (double)(p->zero_t_last_us - p->zero_t_first_us) *
                                                 1e-6 / (double)(p->zero_n - 1)
                                           : 0.0;
@@ -1025,9 +1031,7 @@ static void apply_measured_noise(loadid_pipeline_t *p) {
     const int jr3_spec = source == LOADID_SIGNALS_SENSOR || source == LOADID_SIGNALS_MIXED;
     const int jr3_alpha = source == LOADID_SIGNALS_SENSOR;
     loadid_noise_combine(&p->cfg, jr3_spec, jr3_alpha, channel, src, js, ja, jw, &p->levels);
-    p->levels.correlation[0] = p->noise_corr[0], p->levels.correlation[1] = p->noise_corr[1];
-    for (int c = 0; c < 2; ++c)
-        p->levels.tone_share[c] = p->tone_share[c], p->levels.tone_hz[c] = p->tone_hz[c];
+    zeroing_figures(p, &p->levels);
     for (int m = 0; m < p->num_methods; ++m) {
         if (m == p->refined_m) continue; /* weighted by its own run */
         loadid_est_config_t e = *loadid_est_config(p->est[m]);
