@@ -11,7 +11,8 @@
  *  - the combination takes configured levels over measured ones, and the
  *    fallback when nothing was measured;
  *  - a tone (a vibration) in the still window is found with its share of
- *    the variance and its frequency, against the sinusoid's own figures.
+ *    the variance and its frequency, against the sinusoid's own figures;
+ *  - the levels with the tone taken out are the white noise's own.
  */
 #include <errno.h>
 #include <math.h>
@@ -388,15 +389,17 @@ static void test_a_tone_in_the_still_window(void **state) {
     /* With white noise of sigma 5: the tone's share of the variance, (A^2 /
      * 2) / (A^2 / 2 + sigma^2) = 0.818 in expectation (seen 0.809-0.823
      * over the seeds). */
-    double lo = 1, hi = 0;
+    double lo = 1, hi = 0, off = 0;
     for (uint64_t seed = 1; seed <= 5; ++seed) {
         tone_window(300, 3, 15.0, 31.25, 5.0, seed);
         assert_int_equal(loadid_noise_tone(&acc, 3, 1e-3, &share, &hz), 0);
         lo = fmin(lo, share), hi = fmax(hi, share);
         assert_true(fabs(share - 112.5 / 137.5) < 0.05);
-        assert_true(fabs(hz - 31.25) < 1e-9);
+        off = fmax(off, fabs(hz - 31.25));
     }
-    print_message("tone and white noise: share %.3f-%.3f (expected 0.818)\n", lo, hi);
+    print_message("tone and white noise: share %.3f-%.3f (expected 0.818), %.3f Hz off at most\n",
+                  lo, hi, off);
+    assert_true(off < 0.2); /* a bin is 3.9 Hz */
     /* White noise alone: 2 / n of the variance a bin in expectation, the
      * largest of 127 bins of 3 axes about 0.03 (seen 0.033 at most); the
      * pipeline says a tone from 0.2. */
@@ -409,12 +412,13 @@ static void test_a_tone_in_the_still_window(void **state) {
     print_message("white noise: the largest bin's share over 20 windows %.3f\n", worst);
     assert_true(worst < 0.08);
     /* Off a bin (28 Hz, the simulator's default) the tone leaks into its
-     * neighbours: still most of it in the nearest (27.3 Hz; seen 0.91). */
+     * neighbours: still most of it in the nearest (27.3 Hz; seen 0.91);
+     * its frequency comes from the transform between the bins. */
     tone_window(300, 2, 1.0, 28.0, 0.0, 1);
     assert_int_equal(loadid_noise_tone(&acc, 2, 1e-3, &share, &hz), 0);
-    print_message("a tone off the bins: share %.3f at %.2f Hz\n", share, hz);
+    print_message("a tone off the bins: share %.3f at %.3f Hz\n", share, hz);
     assert_true(share > 0.6);
-    assert_true(fabs(hz - 28.0) < 1000.0 / 256 / 2 + 1e-9);
+    assert_true(fabs(hz - 28.0) < 0.1);
     /* Too few samples, a bad group or period. */
     tone_window(31, 2, 1.0, 28.0, 0.0, 1);
     assert_int_equal(loadid_noise_tone(&acc, 2, 1e-3, &share, &hz), -EAGAIN);
@@ -423,11 +427,59 @@ static void test_a_tone_in_the_still_window(void **state) {
     assert_int_equal(loadid_noise_tone(&acc, 2, 0.0, &share, &hz), -EINVAL);
 }
 
+/* The still window's levels once the tones are out: each channel's sample
+ * standard deviation of the white noise alone (the same draws, kept apart
+ * here), within 1.5 % over seeds (seen 0.5 %); channels without a tone keep their level.
+ * The window: 200 samples, a 1 m/s^2 tone at 28 Hz over 0.5 of noise. */
+static void test_levels_without_the_tone(void **state) {
+    (void)state;
+    double worst = 0;
+    for (uint64_t seed = 1; seed <= 10; ++seed) {
+        loadid_rng_t rng;
+        loadid_rng_seed(&rng, seed);
+        loadid_noise_acc_reset(&acc);
+        double sum[3] = {0}, sum2[3] = {0};
+        const int n = 200;
+        for (int k = 0; k < n; ++k) {
+            double x[LOADID_NOISE_CHANNELS];
+            for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i)
+                x[i] = 3.0 + kSigma[i] * loadid_rng_normal(&rng);
+            for (int c = 0; c < 3; ++c) {
+                const double w = 0.5 * loadid_rng_normal(&rng);
+                sum[c] += w, sum2[c] += w * w;
+                x[6 + c] = 1.0 + w + sin(6.283185307179586 * 28.0 * k * 1e-3 + 1.1 * c);
+            }
+            loadid_noise_acc_still(&acc, x);
+        }
+        double share, hz, sigma[LOADID_NOISE_CHANNELS], plain[LOADID_NOISE_CHANNELS];
+        assert_int_equal(loadid_noise_tone(&acc, 2, 1e-3, &share, &hz), 0);
+        assert_int_equal(loadid_noise_still_sigma_without(&acc, &hz, 1, 1e-3, sigma), 0);
+        assert_int_equal(loadid_noise_acc_sigma(&acc, 10, plain), LOADID_NOISE_STILL);
+        for (int c = 0; c < 3; ++c) {
+            const double want = sqrt((sum2[c] - sum[c] * sum[c] / n) / (n - 1));
+            worst = fmax(worst, fabs(sigma[6 + c] / want - 1));
+            /* with the tone: sqrt(0.25 + 0.5) */
+            assert_true(plain[6 + c] > 1.5 * want);
+        }
+        for (int i = 0; i < 6; ++i) assert_true(fabs(sigma[i] / plain[i] - 1) < 0.03);
+    }
+    print_message("a - g's level without the tone: within %.3f of the noise's own\n", worst);
+    assert_true(worst < 0.015);
+    double hz[3] = {28, 28, 40}, sigma[LOADID_NOISE_CHANNELS];
+    assert_int_equal(loadid_noise_still_sigma_without(&acc, hz, 3, 1e-3, sigma), -EINVAL);
+    assert_int_equal(loadid_noise_still_sigma_without(&acc, hz, 1, 0.0, sigma), -EINVAL);
+    /* the same tone twice cannot be fitted */
+    assert_int_equal(loadid_noise_still_sigma_without(&acc, hz, 2, 1e-3, sigma), -EDOM);
+    loadid_noise_acc_reset(&acc);
+    assert_int_equal(loadid_noise_still_sigma_without(&acc, hz, 1, 1e-3, sigma), -EAGAIN);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_still_window_is_robust),
         cmocka_unit_test(test_still_window_with_a_vibration),
         cmocka_unit_test(test_a_tone_in_the_still_window),
+        cmocka_unit_test(test_levels_without_the_tone),
         cmocka_unit_test(test_third_differences_while_moving),
         cmocka_unit_test(test_joint_levels_by_hand),
         cmocka_unit_test(test_combine_prefers_configuration),

@@ -81,6 +81,7 @@ typedef struct {
     double correlation[2];                       /* lag-1 correlation of the force and the torque
                               noise in the zeroing window; 0 if none */
     double tone_share[2], tone_hz[2];            /* a - g, alpha: loadid_noise_tone; 0 if none */
+    double notch_hz[2]; /* a - g, alpha: the notch on the rows at its tone; 0 if none */
 } loadid_noise_levels_t;
 
 void loadid_noise_acc_reset(loadid_noise_acc_t *a);
@@ -134,6 +135,18 @@ int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double 
 #define LOADID_NOISE_TONE_N 256
 int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, double *share,
                       double *hz);
+
+/* Per-channel standard deviations of the still window (as
+ * loadid_noise_acc_sigma's, about the fit) once each channel's
+ * least-squares sinusoids at hz[0..n_hz) and its mean are taken out: the
+ * noise a notch on those tones leaves, before the notch's own gain on it.
+ * Uses a's scratch space. Returns 0, -EINVAL (n_hz out of 0 ..
+ * LOADID_NOISE_TONES_MAX, a frequency not above 0, a bad period), -EAGAIN
+ * (fewer than 4 samples per fitted parameter) or -EDOM (two tones closer
+ * than 1 / (n period_s), or a fit that fails). */
+#define LOADID_NOISE_TONES_MAX 2
+int loadid_noise_still_sigma_without(loadid_noise_acc_t *a, const double *hz, int n_hz,
+                                     double period_s, double sigma[LOADID_NOISE_CHANNELS]);
 
 /* The joint-derived levels at one pose: omega from the filter's qd error,
  * alpha and a - g from its qdd error through the kinematics (kin at q).

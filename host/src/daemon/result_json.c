@@ -62,6 +62,8 @@ static void levels(FILE *out, const loadid_noise_levels_t *l) {
     array(out, l->tone_share, 2);
     fputs(", \"hz\": ", out);
     array(out, l->tone_hz, 2);
+    fputs(", \"notch_hz\": ", out);
+    array(out, l->notch_hz, 2);
     fputc('}', out);
     fputc('}', out);
 }

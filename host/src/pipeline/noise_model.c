@@ -5,6 +5,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "spd.h"
+
 #define D3_MIN 100
 #define D3_GAIN 20.0 /* var(x_k - 3 x_k-1 + 3 x_k-2 - x_k-3) / sigma^2 = 1 + 9 + 9 + 1 */
 #define MAD_TO_SIGMA 1.482602218505602 /* 1 / Phi^-1(3/4): sigma of a normal from its MAD */
@@ -34,6 +36,15 @@ static double still_value(const loadid_noise_acc_t *a, int k, int i) {
     const double x = still_x(a, k);
     const double *c = a->trend[i];
     return a->still[k][i] - (c[0] + x * (c[1] + x * (c[2] + x * c[3])));
+}
+
+/* Row k's regressors of the tone fit: 1, then cos and sin of each tone. */
+static void regressors(const double *hz, int n_hz, double period_s, int k, double *r) {
+    r[0] = 1;
+    for (int t = 0; t < n_hz; ++t) {
+        const double w = TWO_PI * hz[t] * period_s * k;
+        r[1 + 2 * t] = cos(w), r[2 + 2 * t] = sin(w);
+    }
 }
 
 void loadid_noise_acc_moved(loadid_noise_acc_t *a) {
@@ -202,6 +213,23 @@ int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double 
     return 0;
 }
 
+/* The power of x, y and z at f cycles per n samples (the DFT's bin f,
+ * any real f), the twiddles by recurrence from one rotation. */
+static double group_power(double (*x)[LOADID_NOISE_TONE_N], int n, double f) {
+    const double step = -TWO_PI * f / n, cs = cos(step), sn = sin(step);
+    double power = 0;
+    for (int c = 0; c < 3; ++c) {
+        double re = 0, im = 0, wr = 1, wi = 0;
+        for (int k = 0; k < n; ++k) {
+            re += x[c][k] * wr, im += x[c][k] * wi;
+            const double t = wr * cs - wi * sn;
+            wi = wr * sn + wi * cs, wr = t;
+        }
+        power += re * re + im * im;
+    }
+    return power;
+}
+
 int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, double *share,
                       double *hz) {
     *share = *hz = 0;
@@ -219,24 +247,57 @@ int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, d
     }
     if (!(total > 0)) return 0;
     /* Bin j (1 .. n/2 - 1) and its mirror hold 2 |X_j|^2 / n of the sum of
-     * squares (Parseval); the twiddles by recurrence from one rotation. */
+     * squares (Parseval). */
     int best = 0;
     for (int j = 1; j < n / 2; ++j) {
-        const double step = -TWO_PI * j / n, cs = cos(step), sn = sin(step);
-        double power = 0;
-        for (int c = 0; c < 3; ++c) {
-            double re = 0, im = 0, wr = 1, wi = 0;
-            for (int k = 0; k < n; ++k) {
-                re += x[c][k] * wr, im += x[c][k] * wi;
-                const double t = wr * cs - wi * sn;
-                wi = wr * sn + wi * cs, wr = t;
-            }
-            power += re * re + im * im;
-        }
-        const double s = 2.0 * power / ((double)n * total);
+        const double s = 2.0 * group_power(x, n, j) / ((double)n * total);
         if (s > *share) *share = s, best = j;
     }
-    *hz = best / ((double)n * period_s);
+    /* The tone's frequency within the bin (a bin is 1 / (n period_s) wide,
+     * 5 Hz for 0.2 s of samples, and a notch must sit on it): the peak of
+     * the transform over bin +-0.5 in steps of 0.02. */
+    double f = best, peak = 0;
+    for (int i = -25; i <= 25 && best > 0; ++i) {
+        const double fi = best + 0.02 * i, pw = fi > 0.5 ? group_power(x, n, fi) : 0;
+        if (pw > peak) peak = pw, f = fi;
+    }
+    *hz = f / ((double)n * period_s);
+    return 0;
+}
+
+int loadid_noise_still_sigma_without(loadid_noise_acc_t *a, const double *hz, int n_hz,
+                                     double period_s, double sigma[LOADID_NOISE_CHANNELS]) {
+    if (n_hz < 0 || n_hz > LOADID_NOISE_TONES_MAX || !(period_s > 0)) return -EINVAL;
+    const int n = a->still_n, p = 1 + 2 * n_hz;
+    for (int t = 0; t < n_hz; ++t)
+        if (!(hz[t] > 0)) return -EINVAL;
+    if (n < 4 * p) return -EAGAIN;
+    /* Two tones closer than the window's resolution are one to its fit. */
+    if (n_hz == 2 && fabs(hz[0] - hz[1]) * n * period_s < 1) return -EDOM;
+    for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i) {
+        /* Least squares on [1, cos, sin per tone]: the normal equations. */
+        double M[(1 + 2 * LOADID_NOISE_TONES_MAX) * (1 + 2 * LOADID_NOISE_TONES_MAX)] = {0},
+                                                             b[1 + 2 * LOADID_NOISE_TONES_MAX] =
+                                                                 {0},
+                                                             r[1 + 2 * LOADID_NOISE_TONES_MAX];
+        for (int k = 0; k < n; ++k) {
+            regressors(hz, n_hz, period_s, k, r);
+            const double v = still_value(a, k, i);
+            for (int u = 0; u < p; ++u) {
+                b[u] += r[u] * v;
+                for (int w = 0; w < p; ++w) M[p * u + w] += r[u] * r[w];
+            }
+        }
+        if (loadid_spd_solve(M, b, p) != 0) return -EDOM;
+        for (int k = 0; k < n; ++k) {
+            regressors(hz, n_hz, period_s, k, r);
+            double fit = 0;
+            for (int u = 0; u < p; ++u) fit += r[u] * b[u];
+            a->scratch[k] = still_value(a, k, i) - fit;
+        }
+        /* p parameters: n - p degrees of freedom (about the fit, not a median) */
+        sigma[i] = robust_sigma(a->scratch, a->scratch2, n, 0) * sqrt((double)n / (n - p));
+    }
     return 0;
 }
 
