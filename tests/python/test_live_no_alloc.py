@@ -4,7 +4,9 @@ multicast in a private network namespace, live_session.py): joint states
 and commands over LCM, JR3 frames from --can-file, ZERO, 1.5 s of
 estimation, DONE, REFINED on the worker thread, estimate_t, wrench_t and
 status_t going out, the finished estimate saved to results.directory, the
-CLI's status and reset, SIGTERM.
+CLI's status and reset, SIGTERM; again with signals sensor, where the
+notch on the rows against the accelerometer's vibration runs per sample;
+and the Modbus sensor's session.
 
 The daemon runs with liballoc_count.so preloaded (tests/support/
 alloc_count.c): it counts malloc, calloc, realloc, free, posix_memalign,
@@ -61,6 +63,18 @@ def modbus_session(recording, tmp_path_factory):
     return counted(d, lambda: run_modbus_session(recording, d))
 
 
+@pytest.fixture(scope="module")
+def notch_session(recording, tmp_path_factory):
+    """signals sensor: the recording's vibration (about a tenth of a - g's
+    noise at 28 Hz) puts a notch on the rows, which then filters every
+    sample inside the counted window."""
+    d = tmp_path_factory.mktemp("live_no_alloc_notch")
+    cfg = live_config(d)
+    cfg.write_text(cfg.read_text().replace("estimation:\n", "estimation:\n  signals: sensor\n"))
+    out = counted(d, lambda: run_session(cfg, recording))
+    return out
+
+
 def test_session_went_through_every_path(session):
     """What the window covered: the daemon ran the whole session."""
     assert session["returncode"] == 0, session["stderr"]
@@ -93,3 +107,10 @@ def test_no_allocation_with_the_modbus_sensor_either(modbus_session):
     assert " lost: " in modbus_session["stderr"]  # the reopen path ran in the window
     assert counts(modbus_session["report"])["epoll_waits"] > 1000, modbus_session["report"]
     assert_no_loop_allocation(modbus_session)
+
+
+def test_no_allocation_with_a_notch_on_the_rows(notch_session):
+    assert notch_session["returncode"] == 0, notch_session["stderr"]
+    assert "a notch there on the rows" in notch_session["stderr"], notch_session["stderr"]
+    assert [e for e in notch_session["estimate"] if e["state"] == 3], notch_session["stderr"]
+    assert_no_loop_allocation(notch_session)

@@ -265,6 +265,7 @@ int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, d
     return 0;
 }
 
+#define TONE_FIT_MAX (1 + 2 * LOADID_NOISE_TONES_MAX) /* a mean, cos and sin per tone */
 int loadid_noise_still_sigma_without(loadid_noise_acc_t *a, const double *hz, int n_hz,
                                      double period_s, double sigma[LOADID_NOISE_CHANNELS]) {
     if (n_hz < 0 || n_hz > LOADID_NOISE_TONES_MAX || !(period_s > 0)) return -EINVAL;
@@ -276,10 +277,7 @@ int loadid_noise_still_sigma_without(loadid_noise_acc_t *a, const double *hz, in
     if (n_hz == 2 && fabs(hz[0] - hz[1]) * n * period_s < 1) return -EDOM;
     for (int i = 0; i < LOADID_NOISE_CHANNELS; ++i) {
         /* Least squares on [1, cos, sin per tone]: the normal equations. */
-        double M[(1 + 2 * LOADID_NOISE_TONES_MAX) * (1 + 2 * LOADID_NOISE_TONES_MAX)] = {0},
-                                                             b[1 + 2 * LOADID_NOISE_TONES_MAX] =
-                                                                 {0},
-                                                             r[1 + 2 * LOADID_NOISE_TONES_MAX];
+        double M[TONE_FIT_MAX * TONE_FIT_MAX] = {0}, b[TONE_FIT_MAX] = {0}, r[TONE_FIT_MAX];
         for (int k = 0; k < n; ++k) {
             regressors(hz, n_hz, period_s, k, r);
             const double v = still_value(a, k, i);
