@@ -145,8 +145,8 @@ static void test_the_model_still_holds(void **state) {
             for (int j = 0; j < 10; ++j) v += A[10 * r + j] * phi[j];
             y[r] = (loadid_real_t)v;
         }
-        loadid_notch_bank_apply(&bank, 0, 60, A);
-        loadid_notch_bank_apply(&bank, 192, 6, y);
+        loadid_notch_bank_apply(&bank, LOADID_NOTCH_A, 60, A);
+        loadid_notch_bank_apply(&bank, LOADID_NOTCH_Y, 6, y);
         for (int r = 0; r < 6; ++r) {
             double v = 0;
             for (int j = 0; j < 10; ++j) v += A[10 * r + j] * phi[j];

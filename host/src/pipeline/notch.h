@@ -16,8 +16,12 @@
 
 #include "loadid/types.h"
 
-#define LOADID_NOTCH_STAGES 2     /* a - g's tone and alpha's, when they differ */
-#define LOADID_NOTCH_CHANNELS 198 /* A (6 x 16), RIV's C (6 x 16), y (6) */
+#define LOADID_NOTCH_STAGES 2 /* a - g's tone and alpha's, when they differ */
+/* The bank's channels: A (6 x 16), RIV's C (6 x 16), y (6). */
+#define LOADID_NOTCH_A 0
+#define LOADID_NOTCH_C 96
+#define LOADID_NOTCH_Y 192
+#define LOADID_NOTCH_CHANNELS 198
 
 typedef struct {
     double b[3], a[3]; /* a[0] = 1 */

@@ -1387,9 +1387,9 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
     if (p->refined) loadid_refined_sample(p->refined, s->t_us, y, lin, ang);
     if (p->trace_rows) memcpy(p->row_y, y, sizeof p->row_y);
     if (p->notch.stages > 0) { /* the same filter on both sides: A phi = y still */
-        loadid_notch_bank_apply(&p->notch, 0, 6 * p->n_params, A);
-        if (have_c) loadid_notch_bank_apply(&p->notch, 96, 6 * p->n_params, C);
-        loadid_notch_bank_apply(&p->notch, 192, 6, y);
+        loadid_notch_bank_apply(&p->notch, LOADID_NOTCH_A, 6 * p->n_params, A);
+        if (have_c) loadid_notch_bank_apply(&p->notch, LOADID_NOTCH_C, 6 * p->n_params, C);
+        loadid_notch_bank_apply(&p->notch, LOADID_NOTCH_Y, 6, y);
     }
     if (p->n_params == LOADID_NPHI) {
         loadid_drift_check_add(&p->drift, s->t_us, A, y);
