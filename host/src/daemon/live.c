@@ -360,17 +360,10 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     loadid_input_read(&L.input);
                     sync_input_fd(&L, ep);
                     break;
-                case TAG_TICK: {
+                case TAG_TICK:
                     if (read(tick_fd, &v, sizeof v) < 0) break;
-                    /* The clock's time before what is due by it goes in (LCM's
-                     * queue, a replay's backlog): feeding a stalled loop's
-                     * backlog took ASan's build over 50 ms, and a time taken
-                     * after it made the joint states just fed look stale
-                     * (the smoother's piece ended: live no longer --offline). */
-                    const int64_t now_us = loadid_wall_us();
-                    read_lcm_queue(&L);
                     loadid_input_catch_up(&L.input);
-                    loadid_pipeline_tick(L.pipe, now_us);
+                    loadid_pipeline_tick(L.pipe, loadid_wall_us());
                     loadid_notify_watchdog((int64_t)loadid_mono_us());
                     if (++L.ticks % 100 == 0) {
                         publish_status(&L, 1, 0, 0);
@@ -378,7 +371,6 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                         sync_input_fd(&L, ep);
                     }
                     break;
-                }
                 case TAG_SIGNAL:
                     stop = 1;
                     break;
