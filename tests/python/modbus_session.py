@@ -35,7 +35,7 @@ from lcm_loopback import open_session
 
 # Seconds after the recording's first sample (ZERO at 0.05 s, zeroing until
 # 0.25 s, START at 1.0 s, DONE at 2.5 s, its end at 3.3 s).
-PLAN = {"lost": [0.30, 2.70], "back": [0.60, 2.90], "silent": (0.70, 0.85),
+PLAN = {"lost": [0.30, 2.70], "back": [0.40, 2.90], "silent": (0.70, 0.85),
         "bad_crc": (0.88, 0.93), "until": 3.20}
 
 

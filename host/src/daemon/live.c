@@ -360,10 +360,18 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                     loadid_input_read(&L.input);
                     sync_input_fd(&L, ep);
                     break;
-                case TAG_TICK:
+                case TAG_TICK: {
                     if (read(tick_fd, &v, sizeof v) < 0) break;
+                    /* The clock's time is the one the input catches up to,
+                     * not the time after it: feeding a stalled replay's
+                     * 100 ms took ASan's build over 50 ms, and the later
+                     * time made the joint states just fed look stalled.
+                     * LCM is not read here (it was, above): joint states
+                     * read ahead of the samples change what the smoother
+                     * serves them (test_live_lcm's frozen daemon). */
+                    const int64_t now_us = loadid_wall_us();
                     loadid_input_catch_up(&L.input);
-                    loadid_pipeline_tick(L.pipe, loadid_wall_us());
+                    loadid_pipeline_tick(L.pipe, now_us);
                     loadid_notify_watchdog((int64_t)loadid_mono_us());
                     if (++L.ticks % 100 == 0) {
                         publish_status(&L, 1, 0, 0);
@@ -371,6 +379,7 @@ int loadid_live_run(const loadid_config_t *cfg, const loadid_chain_t *chain,
                         sync_input_fd(&L, ep);
                     }
                     break;
+                }
                 case TAG_SIGNAL:
                     stop = 1;
                     break;
