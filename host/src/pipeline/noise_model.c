@@ -230,6 +230,28 @@ static double group_power(double (*x)[LOADID_NOISE_TONE_N], int n, double f) {
     return power;
 }
 
+/* What least squares on [1, cos, sin] at f cycles per n samples explains
+ * of x, y and z (their sum of squares of the fit). */
+static double group_fit_power(double (*x)[LOADID_NOISE_TONE_N], int n, double f) {
+    double M[9] = {0}, b[3][3] = {{0}}, r[3];
+    const double hz = f / n; /* cycles per sample: regressors' period_s 1 */
+    for (int k = 0; k < n; ++k) {
+        regressors(&hz, 1, 1.0, k, r);
+        for (int u = 0; u < 3; ++u) {
+            for (int c = 0; c < 3; ++c) b[c][u] += r[u] * x[c][k];
+            for (int w = 0; w < 3; ++w) M[3 * u + w] += r[u] * r[w];
+        }
+    }
+    double power = 0;
+    for (int c = 0; c < 3; ++c) {
+        double M_c[9], beta[3] = {b[c][0], b[c][1], b[c][2]};
+        memcpy(M_c, M, sizeof M);
+        if (loadid_spd_solve(M_c, beta, 3) != 0) return 0;
+        power += beta[0] * b[c][0] + beta[1] * b[c][1] + beta[2] * b[c][2];
+    }
+    return power;
+}
+
 int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, double *share,
                       double *hz) {
     *share = *hz = 0;
@@ -254,11 +276,14 @@ int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, d
         if (s > *share) *share = s, best = j;
     }
     /* The tone's frequency within the bin (a bin is 1 / (n period_s) wide,
-     * 5 Hz for 0.2 s of samples, and a notch must sit on it): the peak of
-     * the transform over bin +-0.5 in steps of 0.02. */
+     * 5 Hz for 0.2 s of samples, and a notch must sit on it): where a
+     * least-squares sinusoid explains most, over bin +-1 in steps of 0.01
+     * (a single tone's maximum-likelihood frequency; the transform's peak
+     * is pulled by the window's leakage when it holds few cycles: 7 Hz in
+     * 0.2 s was found at 6.5-7.5 Hz). */
     double f = best, peak = 0;
-    for (int i = -25; i <= 25 && best > 0; ++i) {
-        const double fi = best + 0.02 * i, pw = fi > 0.5 ? group_power(x, n, fi) : 0;
+    for (int i = -100; i <= 100 && best > 0; ++i) {
+        const double fi = best + 0.01 * i, pw = fi >= 0.5 ? group_fit_power(x, n, fi) : 0;
         if (pw > peak) peak = pw, f = fi;
     }
     *hz = f / ((double)n * period_s);
