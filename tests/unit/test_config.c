@@ -210,6 +210,7 @@ static void assert_defaults(const loadid_config_t *c) {
     ASSERT_EQ_D(c->sim_vibration_hz, 28.0);
     ASSERT_EQ_D(c->sim_vibration_linear, 0.3);
     ASSERT_EQ_D(c->sim_vibration_angular, 3.0);
+    ASSERT_EQ_D(c->sim_vibration_start_s, 0.0);
     ASSERT_EQ_D(c->sim_still_s, 0.5);
     /* the paper's o1, section V.A */
     assert_doubles(c->sim_load_phi,
@@ -342,6 +343,7 @@ static const char kEveryKey[] =
     "  vibration_hz: 35\n"
     "  vibration_linear: 0\n"
     "  vibration_angular: 1.5\n"
+    "  vibration_start_s: 0.5\n"
     "  still_s: 1\n"
     "  load_phi: [2, 0.01, 0.02, 0.03, 0.004, 0.0001, 0.0002, 0.005, 0.0003, 0.006]\n"
     "  offset: [-1, 1, -2, 0.01, 0.02, -0.03]\n"
@@ -423,6 +425,7 @@ static void every_key_is_read(void **state) {
     ASSERT_EQ_D(c.sim_vibration_hz, 35);
     ASSERT_EQ_D(c.sim_vibration_linear, 0);
     ASSERT_EQ_D(c.sim_vibration_angular, 1.5);
+    ASSERT_EQ_D(c.sim_vibration_start_s, 0.5);
     ASSERT_EQ_D(c.sim_still_s, 1);
     assert_doubles(
         c.sim_load_phi,

@@ -115,13 +115,14 @@ static void measure(sim_t *s, double t, const loadid_motion_t *m, double value[4
                                       s->cfg.sim_noise_torque * ft_noise(s, 3 + i);
     }
     const double wt = kTwoPi * s->cfg.sim_vibration_hz * t;
+    const double on = t >= s->cfg.sim_vibration_start_s ? 1.0 : 0.0;
     for (int i = 0; i < 3; ++i) {
-        value[LOADID_JR3_LINEAR][i] = m->spec[i] +
-                                      s->cfg.sim_noise_linear * loadid_rng_normal(&s->rng) +
-                                      s->cfg.sim_vibration_linear * sin(wt + s->vib_phase[0][i]);
-        value[LOADID_JR3_ANGULAR][i] = m->alpha[i] +
-                                       s->cfg.sim_noise_angular * loadid_rng_normal(&s->rng) +
-                                       s->cfg.sim_vibration_angular * sin(wt + s->vib_phase[1][i]);
+        value[LOADID_JR3_LINEAR][i] =
+            m->spec[i] + s->cfg.sim_noise_linear * loadid_rng_normal(&s->rng) +
+            on * s->cfg.sim_vibration_linear * sin(wt + s->vib_phase[0][i]);
+        value[LOADID_JR3_ANGULAR][i] =
+            m->alpha[i] + s->cfg.sim_noise_angular * loadid_rng_normal(&s->rng) +
+            on * s->cfg.sim_vibration_angular * sin(wt + s->vib_phase[1][i]);
     }
     /* Accelerometer biases (added only when set: a zero bias leaves the
      * values bit for bit as without it). */
@@ -271,8 +272,9 @@ static int write_truth(const sim_t *s, const char *dir, const char *traj_path,
             "  ft_correlation: %.17g\n",
             c->sim_noise_force, c->sim_noise_torque, c->sim_noise_linear, c->sim_noise_angular,
             c->sim_noise_ft_correlation);
-    fprintf(f, "vibration:\n  hz: %.17g\n  linear: %.17g\n  angular: %.17g\n", c->sim_vibration_hz,
-            c->sim_vibration_linear, c->sim_vibration_angular);
+    fprintf(f, "vibration:\n  hz: %.17g\n  linear: %.17g\n  angular: %.17g\n  start_s: %.17g\n",
+            c->sim_vibration_hz, c->sim_vibration_linear, c->sim_vibration_angular,
+            c->sim_vibration_start_s);
     fprintf(f, "servo:\n  bandwidth_hz: %.17g\n  damping: %.17g\n  backlash: %.17g\n",
             c->sim_servo_bandwidth_hz, c->sim_servo_damping, c->sim_backlash);
     fprintf(f, "encoder_counts: %.17g\n", c->sim_encoder_counts);

@@ -264,6 +264,7 @@ typedef struct {
     double sim_vibration_hz;       /* structural vibration, default 28 */
     double sim_vibration_linear;   /* amplitude on a - g [m/s^2], default 0.3 */
     double sim_vibration_angular;  /* amplitude on alpha [rad/s^2], default 3 */
+    double sim_vibration_start_s;  /* the vibration from then on [s], default 0 */
     double sim_still_s;            /* rest before the trajectory, default 0.5 */
     double sim_load_phi[10];       /* default: the paper's o1 */
     double sim_offset[6];          /* F/T offset [N, N m], default

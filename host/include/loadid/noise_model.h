@@ -124,17 +124,23 @@ int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double 
                             double rho[6]);
 
 /* How much of a channel group's noise in the still window is one tone (a
- * structural vibration): the largest share of the variance of x, y and z
- * together in one frequency bin of the window's first
- * LOADID_NOISE_TONE_N samples (each less its mean, or its cubic when the
- * load moved), and that bin's frequency. White noise spreads its variance
- * over the n / 2 bins (the largest about 4 % at n = 256); a sinusoid puts
- * nearly all of its own in one. group: 0 force, 1 torque, 2 a - g, 3 alpha;
+ * structural vibration): of the window's first LOADID_NOISE_TONE_N
+ * samples of x, y and z (each less its mean, or its cubic when the load
+ * moved), the share of their variance that one least-squares sinusoid
+ * explains, and its frequency (within a bin of the transform's largest).
+ * White noise spreads its variance over the n / 2 bins (the best sinusoid
+ * about 4 % at n = 256); a vibration is most of it. group: 0 force, 1 torque, 2 a - g, 3 alpha;
  * period_s: the samples' spacing. Returns 0, -EINVAL (a bad group or
  * period), or -EAGAIN with fewer than 32 still samples (share, hz 0). */
 #define LOADID_NOISE_TONE_N 256
 int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, double *share,
                       double *hz);
+/* The same over any three channels, x[3 k + c] for n samples period_s
+ * apart: the largest tone of its consecutive blocks of
+ * LOADID_NOISE_TONE_N samples (one block of all n when fewer; a tail
+ * shorter than a block is left out), each block less its mean. Returns 0,
+ * -EINVAL or -EAGAIN (n < 32; share, hz 0). */
+int loadid_noise_tone_blocks(const double *x, int n, double period_s, double *share, double *hz);
 
 /* Per-channel standard deviations of the still window (as
  * loadid_noise_acc_sigma's, about the fit) once each channel's

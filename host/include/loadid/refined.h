@@ -66,6 +66,8 @@ typedef struct {
     int64_t samples;              /* fed to the estimator */
     double sensor_spec_error;     /* the accelerometer's RMS difference to the */
     double sensor_alpha_error;    /*   smoothed joints [m/s^2, rad/s^2]; 0 without one */
+    double sensor_tone_share[2];  /* a - g, alpha: that difference's largest tone */
+    double sensor_tone_hz[2];     /*   (loadid_noise_tone_blocks); 0 without one */
     double unexplained[2];        /* force [N] and torque [N m] residual beyond the
                                   wrench's noise, added to the rows' levels */
     double omega_rms;             /* [rad/s], the column scale used */

@@ -154,6 +154,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->sim_vibration_hz = 28.0;
     cfg->sim_vibration_linear = 0.3;
     cfg->sim_vibration_angular = 3.0;
+    cfg->sim_vibration_start_s = 0.0;
     cfg->sim_still_s = 0.5;
     memcpy(cfg->sim_load_phi, kPhiO1, sizeof kPhiO1);
     static const double kOffset[6] = {2.0, -1.5, 3.0, 0.08, -0.05, 0.03};
@@ -758,6 +759,7 @@ static int read_simulation(loadid_yaml_node_t *root, loadid_config_t *c) {
     TRY(read_number(s, "vibration_hz", &c->sim_vibration_hz, POSITIVE));
     TRY(read_number(s, "vibration_linear", &c->sim_vibration_linear, NON_NEGATIVE));
     TRY(read_number(s, "vibration_angular", &c->sim_vibration_angular, NON_NEGATIVE));
+    TRY(read_number(s, "vibration_start_s", &c->sim_vibration_start_s, NON_NEGATIVE));
     TRY(read_number(s, "still_s", &c->sim_still_s, NON_NEGATIVE));
     TRY(read_numbers(s, "load_phi", c->sim_load_phi, 10, 10, NULL, ANY));
     TRY(read_numbers(s, "offset", c->sim_offset, 6, 6, NULL, ANY));

@@ -153,6 +153,11 @@ int loadid_result_json_write(FILE *out, const loadid_pipeline_estimate_t *est, i
             number(out, ref->sensor_spec_error);
             fputs(", \"sensor_alpha_error\": ", out);
             number(out, ref->sensor_alpha_error);
+            fputs(", \"sensor_tone\": {\"share\": ", out);
+            array(out, ref->sensor_tone_share, 2);
+            fputs(", \"hz\": ", out);
+            array(out, ref->sensor_tone_hz, 2);
+            fputc('}', out);
             fputs(", \"unexplained\": ", out);
             array(out, ref->unexplained, 2);
             fputs(", \"jerk_psd\": ", out);

@@ -673,6 +673,7 @@ static void refined_job(void *ctx) {
     estimate_at(p, p->refined_m, &p->job_est, 1, 0, LOADID_STATE_DONE);
 }
 
+static void warn_moving_tones(loadid_pipeline_t *p);
 static void refined_noted(loadid_pipeline_t *p) {
     p->refined_ran = 1;
     if (p->job_rc != 0) {
@@ -703,6 +704,7 @@ static void refined_noted(loadid_pipeline_t *p) {
              "kalman.joint_delay_s: %.4f (with what is set now) corrects them",
              (double)p->refined_rep.joint_delay_us / 1e3, p->refined_rep.joint_delay_std_us / 1e3,
              p->cfg.kalman_joint_delay_s + (double)p->refined_rep.joint_delay_us * 1e-6);
+    warn_moving_tones(p);
 }
 
 /* REFINED at DONE: in line, or handed to the worker (its estimate is then
@@ -809,7 +811,7 @@ static void set_zeroing_noise(loadid_pipeline_t *p) {
  * A phi = y exact even within the motion's band; under NOTCH_MIN_HZ the
  * window holds under a cycle and the notch would take the motion's main
  * band, and such a tone is only said. */
-#define TONE_SHARE 0.08  /* white noise's largest bin holds about 0.03 at n = 256 */
+#define TONE_SHARE 0.08  /* white noise's best sinusoid about 0.04 at n = 256 */
 #define TONE_BINS 10.0   /* and about 6 / n at other n: TONE_BINS / n at least */
 #define NOTCH_MIN_HZ 4.0 /* 0.8 cycles in 0.2 s; the trajectories' power is mostly under 2 Hz */
 #define NOTCH_Q 2.0      /* -3 dB band f0 / 2: a tone's frequency 2 % off loses 99 % of its power */
@@ -851,6 +853,30 @@ static void measure_tones(loadid_pipeline_t *p, double period_s) {
     if (n_hz > 0 &&
         loadid_noise_still_sigma_without(&p->noise, hz, n_hz, period_s, p->notch_sigma) != 0)
         memset(p->notch_sigma, 0, sizeof p->notch_sigma);
+}
+
+/* A vibration the zeroing window did not have (one the motion excites):
+ * REFINED's tone of the accelerometer less the smoothed joints, at DONE,
+ * on the columns the signals take from the accelerometer and not notched
+ * there. Said, not taken out: the on-line methods have used the rows. */
+static void warn_moving_tones(loadid_pipeline_t *p) {
+    static const char *const name[2] = {"a - g", "alpha"};
+    const int used[2] = {
+        p->cfg.signals == LOADID_SIGNALS_SENSOR || p->cfg.signals == LOADID_SIGNALS_MIXED,
+        p->cfg.signals == LOADID_SIGNALS_SENSOR};
+    for (int c = 0; c < 2; ++c) {
+        const double share = p->refined_rep.sensor_tone_share[c];
+        const double f = p->refined_rep.sensor_tone_hz[c], notch = p->notch_hz[c];
+        if (!used[c] || share < TONE_SHARE || f < NOTCH_MIN_HZ ||
+            (notch > 0 && fabs(f - notch) < 0.1 * notch))
+            continue;
+        note(p,
+             "warning: %.0f %% of the accelerometer's %s difference to the smoothed joints was "
+             "one tone at %.3g Hz while estimating (a vibration the zeroing window did not show, "
+             "so not notched): RLS, RTLS and TLS_BATCH took it for white noise on "
+             "those columns (their phi_std is wider for it; RIV and REFINED are not biased by it)",
+             100 * share, name[c], f);
+    }
 }
 
 static void finish_zeroing(loadid_pipeline_t *p, int64_t utime) {

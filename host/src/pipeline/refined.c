@@ -34,6 +34,7 @@ struct loadid_refined {
     unsigned char *kin_ok;
     loadid_real_t *best_kin, *best_q[3]; /* the best trial's, swapped with the above */
     unsigned char *best_ok;
+    double *tone_x; /* scap x 3: the accelerometer less the smoothed joints, one group */
     loadid_spectrum_rows_t *rows; /* the rows fed to the estimator (phi_std by band) */
     /* run-time work, linear in time order */
     int64_t *t_lin;
@@ -66,6 +67,7 @@ int loadid_refined_create(const loadid_config_t *cfg, const loadid_chain_t *chai
     r->kin_ok = malloc((size_t)r->scap);
     r->best_kin = malloc((size_t)r->scap * 9 * sizeof *r->best_kin);
     r->best_ok = malloc((size_t)r->scap);
+    r->tone_x = malloc((size_t)r->scap * 3 * sizeof *r->tone_x);
     r->t_lin = malloc((size_t)r->jcap * sizeof *r->t_lin);
     r->q_lin = malloc((size_t)r->jcap * sizeof *r->q_lin);
     r->work = malloc(loadid_jf_smooth_work_size((size_t)r->jcap) * sizeof *r->work);
@@ -76,8 +78,8 @@ int loadid_refined_create(const loadid_config_t *cfg, const loadid_chain_t *chai
     rc = loadid_spectrum_rows_create(
         r->scap, cfg->offset_model_estimate ? LOADID_NPHI_OFFSET : LOADID_NPHI, 0, &r->rows);
     if (rc == 0 && !(r->jt && r->jq && r->s && r->kin_store && r->kin_ok && r->best_kin &&
-                     r->best_ok && r->best_q[0] && r->best_q[1] && r->best_q[2] && r->t_lin &&
-                     r->q_lin && r->work && r->qs && r->qds && r->qdds))
+                     r->best_ok && r->tone_x && r->best_q[0] && r->best_q[1] && r->best_q[2] &&
+                     r->t_lin && r->q_lin && r->work && r->qs && r->qds && r->qdds))
         rc = -ENOMEM;
     if (rc) {
         loadid_refined_destroy(r);
@@ -97,6 +99,7 @@ void loadid_refined_destroy(loadid_refined_t *r) {
     free(r->kin_ok);
     free(r->best_kin);
     free(r->best_ok);
+    free(r->tone_x);
     for (int i = 0; i < 3; ++i) free(r->best_q[i]);
     free(r->t_lin);
     free(r->q_lin);
@@ -538,6 +541,32 @@ static int fit_drift(const loadid_refined_t *r, int n_params, const loadid_real_
     return 0;
 }
 
+/* A vibration while estimating: the largest tone of the accelerometer's
+ * difference to the smoothed joints (a - g, alpha), over blocks of the
+ * window (loadid_noise_tone_blocks; the zeroing window's tone is measured
+ * when the load is still, and a vibration the motion excites is not in
+ * it). Samples without kinematics are left out, the rest taken as evenly
+ * spaced. */
+static void sensor_tones(loadid_refined_t *r, loadid_refined_report_t *rep) {
+    int n = 0;
+    int64_t t0 = 0, t1 = 0;
+    for (int g = 0; g < 2; ++g) {
+        n = 0;
+        for (int i = 0; i < r->scount; ++i) {
+            if (!r->kin_ok[i]) continue;
+            const loadid_real_t *k = r->kin_store + 9 * (size_t)i + (g ? 6 : 0);
+            const loadid_real_t *v = g ? r->s[i].ang : r->s[i].lin;
+            for (int a = 0; a < 3; ++a) r->tone_x[3 * n + a] = (double)v[a] - (double)k[a];
+            if (n == 0) t0 = r->s[i].t;
+            t1 = r->s[i].t;
+            ++n;
+        }
+        if (n < 2 || t1 <= t0) return;
+        loadid_noise_tone_blocks(r->tone_x, n, (double)(t1 - t0) * 1e-6 / (n - 1),
+                                 &rep->sensor_tone_share[g], &rep->sensor_tone_hz[g]);
+    }
+}
+
 int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_accel,
                        const double channel[LOADID_NOISE_CHANNELS], int channel_source,
                        const loadid_real_t *zero_a, int n_params, int64_t zeroed_drift_from_us,
@@ -599,6 +628,7 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     if (has_accel) {
         rep->sensor_spec_error = sqrt(d_spec / (3.0 * (double)used));
         rep->sensor_alpha_error = sqrt(d_alpha / (3.0 * (double)used));
+        sensor_tones(r, rep);
     }
     loadid_real_t q[LOADID_MAX_JOINTS], qd[LOADID_MAX_JOINTS], qdd[LOADID_MAX_JOINTS];
     int k = 0;
