@@ -38,8 +38,10 @@ BOUNDS = {
     "vcan": dict(mass_pct=1.2, com_mm=0.95, moment_pct=10.6),
     # test_live_modbus.py's live session (the serial sensor polled at 500 Hz,
     # signals kf, the sensor lost and found, faults), run live per seed:
-    # max 0.81 %, 0.60 mm, 5.4 % (RTLS, RIV, RLS alike)
-    "modbus": dict(mass_pct=2.0, com_mm=1.5, moment_pct=13.5),
+    # max 0.47 %, 0.76 mm, 7.4 % (RTLS, RIV, RLS alike; with the sensor
+    # back at 0.60 s instead of 0.40 an earlier survey's max was 0.81 %,
+    # 0.60 mm, 5.4 %)
+    "modbus": dict(mass_pct=1.2, com_mm=1.9, moment_pct=18.5),
 }
 
 # The vcan VM (tests/vm/run_vcan_vm.sh) replays a recording in real time:
