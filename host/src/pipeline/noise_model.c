@@ -213,35 +213,39 @@ int loadid_noise_offset_cov(const loadid_noise_acc_t *a, int64_t n_mean, double 
     return 0;
 }
 
-/* The power of x, y and z at f cycles per n samples (the DFT's bin f,
- * any real f), the twiddles by recurrence from one rotation. */
-static double group_power(double (*x)[LOADID_NOISE_TONE_N], int n, double f) {
-    const double step = -TWO_PI * f / n, cs = cos(step), sn = sin(step);
-    double power = 0;
-    for (int c = 0; c < 3; ++c) {
-        double re = 0, im = 0, wr = 1, wi = 0;
-        for (int k = 0; k < n; ++k) {
-            re += x[c][k] * wr, im += x[c][k] * wi;
-            const double t = wr * cs - wi * sn;
-            wi = wr * sn + wi * cs, wr = t;
-        }
-        power += re * re + im * im;
+/* The power |X_j|^2 of x, y and z at bins j and j + 1 (j cycles per n
+ * samples): Goertzel's recurrence, one multiplication a sample, its six
+ * chains side by side (each step waits for the one before). */
+static void group_power2(double (*x)[LOADID_NOISE_TONE_N], int n, int j, double power[2]) {
+    const double coeff[2] = {2.0 * cos(TWO_PI * j / n), 2.0 * cos(TWO_PI * (j + 1) / n)};
+    double s1[2][3] = {{0}}, s2[2][3] = {{0}};
+    for (int k = 0; k < n; ++k)
+        for (int b = 0; b < 2; ++b)
+            for (int c = 0; c < 3; ++c) {
+                const double s0 = x[c][k] + coeff[b] * s1[b][c] - s2[b][c];
+                s2[b][c] = s1[b][c], s1[b][c] = s0;
+            }
+    for (int b = 0; b < 2; ++b) {
+        power[b] = 0;
+        for (int c = 0; c < 3; ++c)
+            power[b] += s1[b][c] * s1[b][c] + s2[b][c] * s2[b][c] - coeff[b] * s1[b][c] * s2[b][c];
     }
-    return power;
 }
 
 /* What least squares on [1, cos, sin] at f cycles per n samples explains
- * of x, y and z (their sum of squares of the fit). */
+ * of x, y and z (their sum of squares of the fit); the twiddles by
+ * recurrence from one rotation. */
 static double group_fit_power(double (*x)[LOADID_NOISE_TONE_N], int n, double f) {
-    double M[9] = {0}, b[3][3] = {{0}}, r[3];
-    const double hz = f / n; /* cycles per sample: regressors' period_s 1 */
+    const double step = TWO_PI * f / n, cs = cos(step), sn = sin(step);
+    double c1 = 0, s1 = 0, cc = 0, ss = 0, sc = 0, b[3][3] = {{0}}, wr = 1, wi = 0;
     for (int k = 0; k < n; ++k) {
-        regressors(&hz, 1, 1.0, k, r);
-        for (int u = 0; u < 3; ++u) {
-            for (int c = 0; c < 3; ++c) b[c][u] += r[u] * x[c][k];
-            for (int w = 0; w < 3; ++w) M[3 * u + w] += r[u] * r[w];
-        }
+        c1 += wr, s1 += wi, cc += wr * wr, ss += wi * wi, sc += wr * wi;
+        for (int c = 0; c < 3; ++c)
+            b[c][0] += x[c][k], b[c][1] += wr * x[c][k], b[c][2] += wi * x[c][k];
+        const double t = wr * cs - wi * sn;
+        wi = wr * sn + wi * cs, wr = t;
     }
+    const double M[9] = {(double)n, c1, s1, c1, cc, sc, s1, sc, ss};
     double power = 0;
     for (int c = 0; c < 3; ++c) {
         double M_c[9], beta[3] = {b[c][0], b[c][1], b[c][2]};
@@ -252,32 +256,50 @@ static double group_fit_power(double (*x)[LOADID_NOISE_TONE_N], int n, double f)
     return power;
 }
 
+/* The largest bin of x, y and z's transform (n samples, each less its
+ * mean): its share of their variance and its index (0 if none). Bin j (1
+ * .. n/2 - 1) and its mirror hold 2 |X_j|^2 / n of the sum of squares
+ * (Parseval). */
+static int largest_bin(double (*x)[LOADID_NOISE_TONE_N], int n, double *share, double *total) {
+    *share = *total = 0;
+    for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < n; ++k) *total += x[c][k] * x[c][k];
+    if (!(*total > 0)) return 0;
+    int best = 0;
+    for (int j = 1; j < n / 2; j += 2) {
+        double pw[2];
+        group_power2(x, n, j, pw);
+        for (int b = 0; b < 2 && j + b < n / 2; ++b) {
+            const double s = 2.0 * pw[b] / ((double)n * *total);
+            if (s > *share) *share = s, best = j + b;
+        }
+    }
+    return best;
+}
+
 /* The tone of x, y and z (n samples period_s apart, each less its mean):
- * the largest bin of their transform, then within bin +-1 the sinusoid
- * that explains most of them; its share of their variance and frequency. */
+ * within a bin of the transform's largest, the sinusoid that explains most
+ * of them; its share of their variance and frequency. */
 static void tone_of(double (*x)[LOADID_NOISE_TONE_N], int n, double period_s, double *share,
                     double *hz) {
-    double total = 0;
-    for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < n; ++k) total += x[c][k] * x[c][k];
-    if (!(total > 0)) return;
-    /* Bin j (1 .. n/2 - 1) and its mirror hold 2 |X_j|^2 / n of the sum of
-     * squares (Parseval). */
-    int best = 0;
-    for (int j = 1; j < n / 2; ++j) {
-        const double s = 2.0 * group_power(x, n, j) / ((double)n * total);
-        if (s > *share) *share = s, best = j;
-    }
+    double total;
+    const int best = largest_bin(x, n, share, &total);
+    if (best == 0) return;
     /* The tone's frequency within the bin (a bin is 1 / (n period_s) wide,
      * 5 Hz for 0.2 s of samples, and a notch must sit on it): where a
-     * least-squares sinusoid explains most, over bin +-1 in steps of 0.01
-     * (a single tone's maximum-likelihood frequency; the transform's peak
-     * is pulled by the window's leakage when it holds few cycles: 7 Hz in
-     * 0.2 s was found at 6.5-7.5 Hz). */
+     * least-squares sinusoid explains most, over bin +-1 in steps of 0.05,
+     * then +-0.05 about the best in steps of 0.005 (a single tone's
+     * maximum-likelihood frequency; the transform's peak is pulled by the
+     * window's leakage when it holds few cycles: 7 Hz in 0.2 s was found at
+     * 6.5-7.5 Hz). */
     double f = best, peak = 0;
-    for (int i = -100; i <= 100 && best > 0; ++i) {
-        const double fi = best + 0.01 * i, pw = fi >= 0.5 ? group_fit_power(x, n, fi) : 0;
-        if (pw > peak) peak = pw, f = fi;
+    for (int pass = 0; pass < 2; ++pass) {
+        const double centre = f, step = pass ? 0.005 : 0.05;
+        const int half = pass ? 10 : 20;
+        for (int i = -half; i <= half; ++i) {
+            const double fi = centre + step * i, pw = fi >= 0.5 ? group_fit_power(x, n, fi) : 0;
+            if (pw > peak) peak = pw, f = fi;
+        }
     }
     *hz = f / ((double)n * period_s);
     /* The fitted sinusoid's share, not the bin's: a tone between two bins
@@ -305,25 +327,36 @@ int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, d
     return 0;
 }
 
+/* Block b of m samples of x (x[3 k + c]), each channel less its mean. */
+static void block_of(const double *x, int b, int m, double (*v)[LOADID_NOISE_TONE_N]) {
+    for (int c = 0; c < 3; ++c) {
+        double mean = 0;
+        for (int k = 0; k < m; ++k) {
+            v[c][k] = x[3 * ((size_t)b * m + k) + c];
+            mean += v[c][k] / m;
+        }
+        for (int k = 0; k < m; ++k) v[c][k] -= mean;
+    }
+}
+
 int loadid_noise_tone_blocks(const double *x, int n, double period_s, double *share, double *hz) {
     *share = *hz = 0;
     if (n < 0 || !(period_s > 0)) return -EINVAL;
     if (n < 32) return -EAGAIN;
     const int blocks = n < LOADID_NOISE_TONE_N ? 1 : n / LOADID_NOISE_TONE_N;
     const int m = n < LOADID_NOISE_TONE_N ? n : LOADID_NOISE_TONE_N;
+    /* The block whose largest bin holds most, then its sinusoid (the fit,
+     * 62 frequencies, costs more than the bins). */
+    double v[3][LOADID_NOISE_TONE_N], best_share = 0, total;
+    int best = -1;
     for (int b = 0; b < blocks; ++b) {
-        double v[3][LOADID_NOISE_TONE_N], s = 0, f = 0;
-        for (int c = 0; c < 3; ++c) {
-            double mean = 0;
-            for (int k = 0; k < m; ++k) {
-                v[c][k] = x[3 * ((size_t)b * m + k) + c];
-                mean += v[c][k] / m;
-            }
-            for (int k = 0; k < m; ++k) v[c][k] -= mean;
-        }
-        tone_of(v, m, period_s, &s, &f);
-        if (s > *share) *share = s, *hz = f;
+        double s;
+        block_of(x, b, m, v);
+        if (largest_bin(v, m, &s, &total) > 0 && s > best_share) best_share = s, best = b;
     }
+    if (best < 0) return 0;
+    block_of(x, best, m, v);
+    tone_of(v, m, period_s, share, hz);
     return 0;
 }
 
