@@ -815,11 +815,17 @@ static void set_zeroing_noise(loadid_pipeline_t *p) {
 #define TONE_BINS 10.0   /* and about 6 / n at other n: TONE_BINS / n at least */
 #define NOTCH_MIN_HZ 4.0 /* 0.8 cycles in 0.2 s; the trajectories' power is mostly under 2 Hz */
 #define NOTCH_Q 2.0      /* -3 dB band f0 / 2: a tone's frequency 2 % off loses 99 % of its power */
+/* Which column groups the signals take from the accelerometer: a - g
+ * (sensor, mixed), alpha (sensor). */
+static void accel_columns_used(const loadid_pipeline_t *p, int used[2]) {
+    used[0] = p->cfg.signals == LOADID_SIGNALS_SENSOR || p->cfg.signals == LOADID_SIGNALS_MIXED;
+    used[1] = p->cfg.signals == LOADID_SIGNALS_SENSOR;
+}
+
 static void measure_tones(loadid_pipeline_t *p, double period_s) {
     static const char *const name[2] = {"a - g", "alpha"};
-    const int used[2] = {
-        p->cfg.signals == LOADID_SIGNALS_SENSOR || p->cfg.signals == LOADID_SIGNALS_MIXED,
-        p->cfg.signals == LOADID_SIGNALS_SENSOR};
+    int used[2];
+    accel_columns_used(p, used);
     double hz[LOADID_NOISE_TONES_MAX];
     int n_hz = 0;
     for (int c = 0; c < 2; ++c) {
@@ -861,9 +867,8 @@ static void measure_tones(loadid_pipeline_t *p, double period_s) {
  * there. Said, not taken out: the on-line methods have used the rows. */
 static void warn_moving_tones(loadid_pipeline_t *p) {
     static const char *const name[2] = {"a - g", "alpha"};
-    const int used[2] = {
-        p->cfg.signals == LOADID_SIGNALS_SENSOR || p->cfg.signals == LOADID_SIGNALS_MIXED,
-        p->cfg.signals == LOADID_SIGNALS_SENSOR};
+    int used[2];
+    accel_columns_used(p, used);
     for (int c = 0; c < 2; ++c) {
         const double share = p->refined_rep.sensor_tone_share[c];
         const double f = p->refined_rep.sensor_tone_hz[c], notch = p->notch_hz[c];

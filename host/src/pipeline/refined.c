@@ -548,10 +548,9 @@ static int fit_drift(const loadid_refined_t *r, int n_params, const loadid_real_
  * it). Samples without kinematics are left out, the rest taken as evenly
  * spaced. */
 static void sensor_tones(loadid_refined_t *r, loadid_refined_report_t *rep) {
-    int n = 0;
-    int64_t t0 = 0, t1 = 0;
     for (int g = 0; g < 2; ++g) {
-        n = 0;
+        int n = 0;
+        int64_t t0 = 0, t1 = 0;
         for (int i = 0; i < r->scount; ++i) {
             if (!r->kin_ok[i]) continue;
             const loadid_real_t *k = r->kin_store + 9 * (size_t)i + (g ? 6 : 0);
