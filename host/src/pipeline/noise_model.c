@@ -256,6 +256,15 @@ static double group_fit_power(double (*x)[LOADID_NOISE_TONE_N], int n, double f)
     return power;
 }
 
+/* x, y and z (n samples) each less its mean. */
+static void less_means(double (*x)[LOADID_NOISE_TONE_N], int n) {
+    for (int c = 0; c < 3; ++c) {
+        double mean = 0;
+        for (int k = 0; k < n; ++k) mean += x[c][k] / n;
+        for (int k = 0; k < n; ++k) x[c][k] -= mean;
+    }
+}
+
 /* The largest bin of x, y and z's transform (n samples, each less its
  * mean): its share of their variance and its index (0 if none). Bin j (1
  * .. n/2 - 1) and its mirror hold 2 |X_j|^2 / n of the sum of squares
@@ -315,28 +324,18 @@ int loadid_noise_tone(const loadid_noise_acc_t *a, int group, double period_s, d
     const int n = a->still_n < LOADID_NOISE_TONE_N ? a->still_n : LOADID_NOISE_TONE_N;
     if (n < 32) return -EAGAIN;
     double x[3][LOADID_NOISE_TONE_N];
-    for (int c = 0; c < 3; ++c) {
-        double mean = 0;
-        for (int k = 0; k < n; ++k) {
-            x[c][k] = still_value(a, k, 3 * group + c);
-            mean += x[c][k] / n;
-        }
-        for (int k = 0; k < n; ++k) x[c][k] -= mean;
-    }
+    for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < n; ++k) x[c][k] = still_value(a, k, 3 * group + c);
+    less_means(x, n);
     tone_of(x, n, period_s, share, hz);
     return 0;
 }
 
 /* Block b of m samples of x (x[3 k + c]), each channel less its mean. */
 static void block_of(const double *x, int b, int m, double (*v)[LOADID_NOISE_TONE_N]) {
-    for (int c = 0; c < 3; ++c) {
-        double mean = 0;
-        for (int k = 0; k < m; ++k) {
-            v[c][k] = x[3 * ((size_t)b * m + k) + c];
-            mean += v[c][k] / m;
-        }
-        for (int k = 0; k < m; ++k) v[c][k] -= mean;
-    }
+    for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < m; ++k) v[c][k] = x[3 * ((size_t)b * m + k) + c];
+    less_means(v, m);
 }
 
 int loadid_noise_tone_blocks(const double *x, int n, double period_s, double *share, double *hz) {
