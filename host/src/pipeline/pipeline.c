@@ -815,6 +815,13 @@ static void set_zeroing_noise(loadid_pipeline_t *p) {
 #define TONE_BINS 10.0   /* and about 6 / n at other n: TONE_BINS / n at least */
 #define NOTCH_MIN_HZ 4.0 /* 0.8 cycles in 0.2 s; the trajectories' power is mostly under 2 Hz */
 #define NOTCH_Q 2.0      /* -3 dB band f0 / 2: a tone's frequency 2 % off loses 99 % of its power */
+static const char *const kAccelGroup[2] = {"a - g", "alpha"};
+
+/* Two tones one notch takes out: within a tenth of the notch's frequency. */
+static int same_tone(double hz, double notch_hz) {
+    return notch_hz > 0 && fabs(hz - notch_hz) < 0.1 * notch_hz;
+}
+
 /* Which column groups the signals take from the accelerometer: a - g
  * (sensor, mixed), alpha (sensor). */
 static void accel_columns_used(const loadid_pipeline_t *p, int used[2]) {
@@ -823,7 +830,6 @@ static void accel_columns_used(const loadid_pipeline_t *p, int used[2]) {
 }
 
 static void measure_tones(loadid_pipeline_t *p, double period_s) {
-    static const char *const name[2] = {"a - g", "alpha"};
     int used[2];
     accel_columns_used(p, used);
     double hz[LOADID_NOISE_TONES_MAX];
@@ -841,11 +847,11 @@ static void measure_tones(loadid_pipeline_t *p, double period_s) {
                  "%.3g Hz (a vibration), too near the motion's band to take out: the weights "
                  "take it for white noise, and RTLS and TLS_BATCH on these columns may be "
                  "biased by it (RIV and REFINED are not)",
-                 100 * p->tone_share[c], name[c], f);
+                 100 * p->tone_share[c], kAccelGroup[c], f);
             continue;
         }
         /* a - g's and alpha's tone within a tenth of each other: one notch */
-        const int same = c == 1 && p->notch_hz[0] > 0 && fabs(f - p->notch_hz[0]) < 0.1 * f;
+        const int same = c == 1 && same_tone(f, p->notch_hz[0]);
         if (!same) {
             loadid_notch_bank_add(&p->notch, &bq);
             hz[n_hz++] = f;
@@ -854,7 +860,7 @@ static void measure_tones(loadid_pipeline_t *p, double period_s) {
         note(p,
              "zeroing: %.0f %% of the accelerometer's %s noise is one tone at %.3g Hz (a "
              "vibration): a notch there on the rows and the wrench takes it out",
-             100 * p->tone_share[c], name[c], p->notch_hz[c]);
+             100 * p->tone_share[c], kAccelGroup[c], p->notch_hz[c]);
     }
     if (n_hz > 0 &&
         loadid_noise_still_sigma_without(&p->noise, hz, n_hz, period_s, p->notch_sigma) != 0)
@@ -866,21 +872,19 @@ static void measure_tones(loadid_pipeline_t *p, double period_s) {
  * on the columns the signals take from the accelerometer and not notched
  * there. Said, not taken out: the on-line methods have used the rows. */
 static void warn_moving_tones(loadid_pipeline_t *p) {
-    static const char *const name[2] = {"a - g", "alpha"};
     int used[2];
     accel_columns_used(p, used);
     for (int c = 0; c < 2; ++c) {
         const double share = p->refined_rep.sensor_tone_share[c];
-        const double f = p->refined_rep.sensor_tone_hz[c], notch = p->notch_hz[c];
-        if (!used[c] || share < TONE_SHARE || f < NOTCH_MIN_HZ ||
-            (notch > 0 && fabs(f - notch) < 0.1 * notch))
+        const double f = p->refined_rep.sensor_tone_hz[c];
+        if (!used[c] || share < TONE_SHARE || f < NOTCH_MIN_HZ || same_tone(f, p->notch_hz[c]))
             continue;
         note(p,
              "warning: %.0f %% of the accelerometer's %s difference to the smoothed joints was "
              "one tone at %.3g Hz while estimating (a vibration the zeroing window did not show, "
              "so not notched): RLS, RTLS and TLS_BATCH took it for white noise on "
              "those columns (their phi_std is wider for it; RIV and REFINED are not biased by it)",
-             100 * share, name[c], f);
+             100 * share, kAccelGroup[c], f);
     }
 }
 
