@@ -11,6 +11,7 @@
 
 #include "enum_value.hpp"
 #include "finite.hpp"
+#include "position_noise.hpp"
 #include "stamp_clock.hpp"
 
 using namespace loadid;
@@ -22,8 +23,9 @@ struct loadid_signals {
     loadid_jf_t *measured;
     loadid_jf_t *setpoint;
     loadid_signals_stats_t stats;
-    StampClock clock; // the joint stamps regularised (stamp_clock.hpp)
-    bool piece_ended; // loadid_signals_end_piece since the last joint state
+    StampClock clock;             // the joint stamps regularised (stamp_clock.hpp)
+    PositionNoise position_noise; // of the measured positions (position_noise.hpp)
+    bool piece_ended;             // loadid_signals_end_piece since the last joint state
     // The period probe (cfg.period_probe): the joint states held until the
     // period is known; period_us the filters' period, 0 while probing.
     struct Held {
@@ -162,6 +164,7 @@ extern "C" int loadid_signals_reset(loadid_signals_t *s) {
     loadid_jf_reset(s->setpoint);
     s->stats = loadid_signals_stats_t{};
     s->clock.reset();
+    s->position_noise.reset();
     s->held_count = 0;
     return 0;
 }
@@ -201,6 +204,7 @@ int feed(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *p
         return rc;
     }
     s->clock.commit();
+    s->position_noise.add(t_us, position, s->n, s->period_us);
     ++s->stats.joint_msgs_ok;
     s->piece_ended = false;
     return 0;
@@ -292,6 +296,14 @@ extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int
 
 extern "C" int64_t loadid_signals_joint_period_us(const loadid_signals_t *s) {
     return s ? s->period_us : -EINVAL;
+}
+
+extern "C" double loadid_signals_position_noise(const loadid_signals_t *s) {
+    return s ? s->position_noise.sigma() : 0;
+}
+
+extern "C" void loadid_signals_position_noise_reset(loadid_signals_t *s) {
+    if (s) s->position_noise.reset();
 }
 
 extern "C" double loadid_signals_stream_period_us(const loadid_signals_t *s) {

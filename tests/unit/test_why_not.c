@@ -43,6 +43,9 @@ static void test_each_reason_in_words(void **state) {
          "mostly translational motion"},
         {2, LOADID_WHY_SNR, INFINITY, "its torque does not stand out of the noise at all"},
         {0, LOADID_WHY_NO_MASS, 0, "no positive mass"},
+        {0, LOADID_WHY_JOINT_NOISE, 67.6,
+         "the joint positions are 67.6 times noisier than kalman.meas_sigma: phi_std does not "
+         "count what the joint filters passed on"},
     };
     char out[160];
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {

@@ -135,6 +135,14 @@ int64_t loadid_signals_joint_period_us(const loadid_signals_t *s);
  * before the second joint state (also for NULL). */
 double loadid_signals_stream_period_us(const loadid_signals_t *s);
 
+/* The measured joint positions' own noise since create, reset or
+ * loadid_signals_position_noise_reset: the largest joint's std [rad or m]
+ * from the fourth differences of consecutive states (a quantised encoder:
+ * its step / sqrt(12)); 0 with fewer than 16 differences or for NULL.
+ * What kalman.meas_sigma should be (src/position_noise.hpp). */
+double loadid_signals_position_noise(const loadid_signals_t *s);
+void loadid_signals_position_noise_reset(loadid_signals_t *s);
+
 /* The measured positions' filter bank's configuration as it runs now (after
  * a probe: for the measured period). Returns 0 or -EINVAL. */
 int loadid_signals_filter_config(const loadid_signals_t *s, loadid_jf_config_t *out);

@@ -81,7 +81,9 @@ typedef struct {
     double correlation[2];                       /* lag-1 correlation of the force and the torque
                               noise in the zeroing window; 0 if none */
     double tone_share[2], tone_hz[2];            /* a - g, alpha: loadid_noise_tone; 0 if none */
-    double notch_hz[2]; /* a - g, alpha: the notch on the rows at its tone; 0 if none */
+    double notch_hz[2];    /* a - g, alpha: the notch on the rows at its tone; 0 if none */
+    double joint_position; /* the joint positions' own noise over the window (the largest
+                              joint's, loadid_signals_position_noise); 0 until DONE */
 } loadid_noise_levels_t;
 
 void loadid_noise_acc_reset(loadid_noise_acc_t *a);

@@ -94,6 +94,11 @@ void loadid_refined_destroy(loadid_refined_t *r);
 void loadid_refined_joint(loadid_refined_t *r, int64_t t_us, const loadid_real_t *q);
 /* START: forget the window's samples. */
 void loadid_refined_start(loadid_refined_t *r);
+/* The joint positions' noise the smoother assumes [rad or m]: the
+ * configuration's kalman.meas_sigma, or what the window measured when that
+ * is more (loadid_signals_position_noise; a value <= 0 or not finite
+ * keeps the configuration's). */
+void loadid_refined_set_meas_sigma(loadid_refined_t *r, double sigma);
 
 /* The rows the last run fed its estimator, for phi_std by band of
  * frequency (spectrum_rows.h): transformed when the run had enough

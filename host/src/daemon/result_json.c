@@ -56,6 +56,8 @@ static void levels(FILE *out, const loadid_noise_levels_t *l) {
     fputs(", \"joint\": ", out);
     const double j[3] = {l->joint_spec, l->joint_alpha, l->joint_omega};
     array(out, j, 3);
+    fputs(", \"joint_position\": ", out);
+    number(out, l->joint_position);
     fputs(", \"correlation\": ", out);
     array(out, l->correlation, 2);
     fputs(", \"tone\": {\"share\": ", out);

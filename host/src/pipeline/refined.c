@@ -111,6 +111,10 @@ void loadid_refined_destroy(loadid_refined_t *r) {
     free(r);
 }
 
+void loadid_refined_set_meas_sigma(loadid_refined_t *r, double sigma) {
+    if (r && sigma > 0 && isfinite(sigma)) r->jf.meas_sigma = (loadid_real_t)sigma;
+}
+
 void loadid_refined_joint(loadid_refined_t *r, int64_t t_us, const loadid_real_t *q) {
     /* At most 2 kHz, what the ring holds over the window and a second: a
      * faster stream's states are thinned (at 4 kHz, kept whole, the

@@ -45,6 +45,12 @@ int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char
                      "as on slow or mostly translational motion",
                      over);
             break;
+        case LOADID_WHY_JOINT_NOISE:
+            snprintf(out, len,
+                     "the joint positions are %.3g times noisier than kalman.meas_sigma: "
+                     "phi_std does not count what the joint filters passed on",
+                     over);
+            break;
         default: /* not kept: a result restored from its saved YAML */
             snprintf(out, len, "not identified (no reason kept)");
             break;
