@@ -90,8 +90,8 @@ typedef struct {
      * period_probe > 0 the first period_probe + 1 joint states are held
      * (samples meanwhile get LOADID_E_NO_DATA; the states are counted
      * when they reach the filters), the least-squares slope of their
-     * stamps against their period counts (each interval their median,
-     * rounded) is the period P, and both filter banks are configured
+     * stamps against their period counts (stamp_period of
+     * src/stamp_clock.hpp) is the period P, and both filter banks are configured
      * for it before the held states go in: nominal_step_us P, lag_steps
      * lag_us / P (at most LOADID_JF_MAX_LAG), and max_joint_age_us and
      * max_step_us at least 2 P, so that a sample between two joint states
