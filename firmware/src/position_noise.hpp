@@ -47,7 +47,6 @@ class PositionNoise {
         for (int j = 0; j < n_; ++j) worst = std::fmax(worst, sum_[j]);
         return std::sqrt(worst / (70.0 * double(count_)));
     }
-    int64_t count() const { return count_; }
 
   private:
     static constexpr int kDepth = 5, kMinCount = 16;

@@ -94,10 +94,10 @@ void loadid_refined_destroy(loadid_refined_t *r);
 void loadid_refined_joint(loadid_refined_t *r, int64_t t_us, const loadid_real_t *q);
 /* START: forget the window's samples. */
 void loadid_refined_start(loadid_refined_t *r);
-/* The joint positions' noise the smoother assumes [rad or m]: the
- * configuration's kalman.meas_sigma, or what the window measured when that
- * is more (loadid_signals_position_noise; a value <= 0 or not finite
- * keeps the configuration's). */
+/* The joint positions' noise its smoother assumes from the next run on
+ * [rad or m] (create: kalman.meas_sigma; the pipeline sets it before each
+ * run, to what the window measured when that is clearly more); a value
+ * <= 0 or not finite leaves it as it is. */
 void loadid_refined_set_meas_sigma(loadid_refined_t *r, double sigma);
 
 /* The rows the last run fed its estimator, for phi_std by band of

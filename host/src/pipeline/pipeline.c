@@ -91,9 +91,9 @@ struct loadid_pipeline {
     int64_t zero_t_last_us;          /* its last sample */
     /* the wrench and time sums over the samples zero_a has (kinematics) */
     double zero_kin_sum[6], zero_kin_t_sum;
-    double noise_corr[2]; /* the zeroing window's (set_zeroing_noise) */
-    double joint_noise,
-        joint_over; /* the window's joint position noise, its excess (check_joint_noise) */
+    double noise_corr[2];             /* the zeroing window's (set_zeroing_noise) */
+    double joint_noise;               /* the window's joint position noise (check_joint_noise) */
+    double joint_over;                /* its excess over kalman.meas_sigma; 0 within tolerance */
     double tone_share[2], tone_hz[2]; /* a - g, alpha (measure_tones) */
     /* the notch on the rows against those tones (notch.h; no stages: none),
      * its frequencies per column group (0: none) and the still window's
