@@ -15,7 +15,7 @@
 // than half a period off the prediction (a bunched message, another
 // rate) restarts the acquisition there. The periods a stamp is counted
 // as are those from the line's own time for the last stamp (at first the
-// period the clock started from, from kSlopeFrom stamps on the line's
+// period the clock started from, from kStampSlopeFrom stamps on the line's
 // slope): counted from the raw interval, a jitter over a quarter period
 // made an interval round to 0 or 2 every few dozen stamps, each restarted
 // the acquisition, the loop never locked, and with 300-500 us of jitter at
@@ -27,6 +27,29 @@
 #include <cstdint>
 
 namespace loadid {
+
+// Welford's least-squares line through points (i, y): running means and
+// co-moments, and the residual sum of squares.
+struct StampLine {
+    int n = 0;
+    double mean_i = 0, mean_t = 0, c_ii = 0, c_it = 0, c_tt = 0;
+    void add(double i, double y) {
+        const double di = i - mean_i, dy = y - mean_t;
+        ++n;
+        mean_i += di / n;
+        mean_t += dy / n;
+        c_ii += di * (i - mean_i);
+        c_it += di * (y - mean_t);
+        c_tt += dy * (y - mean_t);
+    }
+    double slope() const { return c_it / c_ii; }
+    double at(double i) const { return mean_t + slope() * (i - mean_i); }
+    double rms() const { return std::sqrt(std::max(c_tt - c_it * c_it / c_ii, 0.0) / n); }
+};
+
+// Stamps on a line before its slope, not the period it started from,
+// counts their periods.
+constexpr int kStampSlopeFrom = 8;
 
 class StampClock {
   public:
@@ -45,7 +68,7 @@ class StampClock {
         State &s = next_;
         if (s.last_raw == INT64_MIN) {
             start(s, t_raw, nominal);
-        } else if (s.n > 0) {
+        } else if (s.acquiring) {
             acquire(s, t_raw, nominal, gain);
         } else {
             track(s, t_raw, gain);
@@ -59,50 +82,45 @@ class StampClock {
     struct State {
         double t = 0, period = 0; // the last regularised time, the period [us]
         int64_t last_raw = INT64_MIN;
-        // Acquisition (n > 0 stamps on the line; 0: locked): periods since
-        // t0, and the running means and co-moments of (i, t - t0).
-        int64_t n = 0, t0 = 0;
-        double i = 0, mean_i = 0, mean_t = 0, c_ii = 0, c_it = 0;
-        double base = 0; // the period counted with while the line is short
+        // Acquisition (until locked): the line through (i, t - t0), i the
+        // periods since t0, i of the last stamp, and the period counted
+        // with while the line is short.
+        bool acquiring = false;
+        StampLine line;
+        int64_t t0 = 0;
+        double i = 0, base = 0;
     };
-    static constexpr int64_t kMaxAcquire = 1000000;
-    static constexpr int64_t kSlopeFrom = 8;   // stamps on the line before its slope counts
+    static constexpr int kMaxAcquire = 1000000;
     static constexpr double kOtherRate = 1.75; // a first interval this many periods: another rate
 
     static void start(State &s, int64_t t_raw, double period) {
         s.t = double(t_raw);
         s.period = s.base = period;
-        s.n = 1;
+        s.acquiring = true;
+        s.line = StampLine{};
+        s.line.add(0, 0);
         s.t0 = t_raw;
-        s.i = s.mean_i = s.mean_t = s.c_ii = s.c_it = 0;
+        s.i = 0;
     }
 
     static void acquire(State &s, int64_t t_raw, double nominal, double gain) {
         const double interval = double(t_raw - s.last_raw);
-        double p = s.n >= kSlopeFrom ? s.period : s.base;
+        double p = s.line.n >= kStampSlopeFrom ? s.period : s.base;
         // The first interval well over the nominal period is a stream at
         // another rate (a 250 Hz stream for filters set for 1 kHz), not
         // lost messages: its period is that interval.
-        if (s.n == 1 && !(interval < kOtherRate * p)) s.period = s.base = p = interval;
+        if (s.line.n == 1 && !(interval < kOtherRate * p)) s.period = s.base = p = interval;
         const double k = p > 0 ? std::round((double(t_raw) - s.t) / p) : 0;
         if (!(k >= 1) || std::abs(double(t_raw) - (s.t + k * p)) > 0.5 * p) {
             start(s, t_raw, nominal > 0 ? nominal : interval);
             return;
         }
-        // Welford's update of the means and co-moments.
         s.i += k;
-        const double y = double(t_raw - s.t0);
-        ++s.n;
-        const double di = s.i - s.mean_i;
-        s.mean_i += di / double(s.n);
-        s.mean_t += (y - s.mean_t) / double(s.n);
-        s.c_ii += di * (s.i - s.mean_i);
-        s.c_it += di * (y - s.mean_t);
-        const double b = s.c_it / s.c_ii;
-        s.period = b;
-        s.t = double(s.t0) + s.mean_t + b * (s.i - s.mean_i);
+        s.line.add(s.i, double(t_raw - s.t0));
+        s.period = s.line.slope();
+        s.t = double(s.t0) + s.line.at(s.i);
         const double lock = std::min(std::ceil(4 / gain), double(kMaxAcquire));
-        if (double(s.n) >= lock) s.n = 0;
+        if (double(s.line.n) >= lock) s.acquiring = false;
     }
 
     static void track(State &s, int64_t t_raw, double g) {
@@ -123,8 +141,6 @@ class StampClock {
     }
 
     State s_, next_;
-
-    friend double stamp_period(const int64_t *t, int n, double p0);
 };
 
 // The period of one stream's stamps t[0..n], some jittered (by up to half a
@@ -134,37 +150,20 @@ class StampClock {
 // residual (a lost state shifts every later stamp by a period; 16
 // intervals with 400 us of jitter at 1 kHz fitted a 0.85 ms grid with
 // three lost at half of it): from the line so
-// far (with p0, the intervals' median, until the line has kSlopeFrom
+// far (with p0, the intervals' median, until the line has kStampSlopeFrom
 // stamps; t[0] starts it), a stamp that fits no count left out. Counted
 // that way alone, a jittered long interval among few stamps passed for a
 // lost state and put the period 15 % short. p0 when fewer than two fit.
 inline double stamp_period(const int64_t *t, int n, double p0) {
     if (!(p0 > 0) || n < 1) return p0;
-    // Welford's line through (i, t - t0), and its residual sum of squares.
-    struct Line {
-        int n = 0;
-        double mean_i = 0, mean_t = 0, c_ii = 0, c_it = 0, c_tt = 0;
-        void add(double i, double y) {
-            const double di = i - mean_i, dy = y - mean_t;
-            ++n;
-            mean_i += di / n;
-            mean_t += dy / n;
-            c_ii += di * (i - mean_i);
-            c_it += di * (y - mean_t);
-            c_tt += dy * (y - mean_t);
-        }
-        double slope() const { return c_it / c_ii; }
-        double at(double i) const { return mean_t + slope() * (i - mean_i); }
-        double rms() const { return std::sqrt(std::max(c_tt - c_it * c_it / c_ii, 0.0) / n); }
-    };
-    Line single, counted;
+    StampLine single, counted;
     for (int j = 0; j <= n; ++j) single.add(j, double(t[j] - t[0]));
     const bool fits = single.slope() > 0;
     counted.add(0, 0);
     double i_last = 0, t_last = 0;
     for (int j = 1; j <= n; ++j) {
         const double y = double(t[j] - t[0]);
-        const double p = counted.n >= StampClock::kSlopeFrom ? counted.slope() : p0;
+        const double p = counted.n >= kStampSlopeFrom ? counted.slope() : p0;
         const double k = std::round((y - t_last) / p);
         if (!(k >= 1) || std::abs(y - (t_last + k * p)) > 0.5 * p) continue;
         i_last += k;

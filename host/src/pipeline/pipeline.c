@@ -91,9 +91,8 @@ struct loadid_pipeline {
     int64_t zero_t_last_us;          /* its last sample */
     /* the wrench and time sums over the samples zero_a has (kinematics) */
     double zero_kin_sum[6], zero_kin_t_sum;
-    double noise_corr[2];             /* the zeroing window's (set_zeroing_noise) */
-    double joint_noise;               /* the window's joint position noise (check_joint_noise) */
-    double joint_over;                /* its excess over kalman.meas_sigma; 0 within tolerance */
+    double noise_corr[2]; /* the zeroing window's (set_zeroing_noise) */
+    double joint_over;    /* levels.joint_position over kalman.meas_sigma; 0 within tolerance */
     double tone_share[2], tone_hz[2]; /* a - g, alpha (measure_tones) */
     /* the notch on the rows against those tones (notch.h; no stages: none),
      * its frequencies per column group (0: none) and the still window's
@@ -559,7 +558,7 @@ static void zeroing_figures(const loadid_pipeline_t *p, loadid_noise_levels_t *l
         l->tone_hz[c] = p->tone_hz[c];
         l->notch_hz[c] = p->notch_hz[c];
     }
-    l->joint_position = p->joint_noise;
+    l->joint_position = p->levels.joint_position; /* check_joint_noise's */
 }
 
 /* A final estimate's groups not identified, and why, in one line. */
@@ -727,9 +726,9 @@ static void run_refined(loadid_pipeline_t *p) {
      * clearly more than the configuration says (check_joint_noise; within
      * twice, the configuration fits): with 2^14 counts on filters set for
      * 2^20 REFINED was 2.5 phi_std off in mass, 0.6 with the measured. */
-    loadid_refined_set_meas_sigma(p->refined, p->joint_noise > 2 * p->cfg.kalman_meas_sigma
-                                                  ? p->joint_noise
-                                                  : p->cfg.kalman_meas_sigma);
+    const double measured = p->levels.joint_position;
+    loadid_refined_set_meas_sigma(
+        p->refined, measured > 2 * p->cfg.kalman_meas_sigma ? measured : p->cfg.kalman_meas_sigma);
     p->job_src = loadid_noise_acc_sigma(&p->noise, MIN_ZEROING_SAMPLES, p->job_channel);
     memset(&p->latest[p->refined_m], 0, sizeof p->latest[p->refined_m]);
     if (p->worker && loadid_worker_submit(p->worker) == 0) return;
@@ -783,9 +782,9 @@ static void check_drift(loadid_pipeline_t *p) {
 #define JOINT_NOISE_TOLERANCE 5.0
 
 static void check_joint_noise(loadid_pipeline_t *p) {
-    p->joint_noise = p->levels.joint_position = loadid_signals_position_noise(p->sig);
+    const double measured = p->levels.joint_position = loadid_signals_position_noise(p->sig);
     p->joint_over = 0;
-    const double over = p->joint_noise / p->cfg.kalman_meas_sigma;
+    const double over = measured / p->cfg.kalman_meas_sigma;
     if (!(over > JOINT_NOISE_TOLERANCE) ||
         !(p->cfg.signals == LOADID_SIGNALS_KF || p->cfg.signals == LOADID_SIGNALS_MIXED))
         return;
@@ -796,9 +795,9 @@ static void check_joint_noise(loadid_pipeline_t *p) {
          "a coarser encoder): the filters passed it into %s uncounted, so RLS, RTLS and "
          "TLS_BATCH on them claim nothing (RIV's instruments and REFINED's smoother hold); "
          "kalman.meas_sigma: %.3g fits these joints",
-         over, p->joint_noise, p->cfg.kalman_meas_sigma,
+         over, measured, p->cfg.kalman_meas_sigma,
          p->cfg.signals == LOADID_SIGNALS_KF ? "a - g, omega and alpha" : "omega and alpha",
-         p->joint_noise);
+         measured);
 }
 
 static void finish_estimation(loadid_pipeline_t *p, int64_t utime, int by_stop) {
@@ -1279,8 +1278,8 @@ static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const c
             }
             reset_run(p);
             loadid_signals_position_noise_reset(p->sig);
-            p->joint_noise = p->joint_over = 0;
-            apply_measured_noise(p);
+            p->joint_over = 0;
+            apply_measured_noise(p); /* levels.joint_position 0 until DONE */
             if (p->n_params == LOADID_NPHI)
                 loadid_drift_check_reset(
                     &p->drift, p->zero_t_first_us + llround(p->zero_t_sum / (double)p->zero_n),
