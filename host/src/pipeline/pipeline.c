@@ -773,12 +773,12 @@ static void check_drift(loadid_pipeline_t *p) {
 /* The joint positions' own noise over the window against the joint
  * filters' kalman.meas_sigma: beyond this factor the filters passed noise
  * into a - g, omega and alpha (kf; omega and alpha for mixed) that the
- * weights and phi_std of RLS, RTLS and TLS_BATCH do not count (RIV's
+ * weights and phi_std of RLS, RTLS, LS_BATCH and TLS_BATCH do not count (RIV's
  * instruments are not those columns: 0.2 % off at 64). On the simulated
  * RX60 (2 kg box, paper noise, filters set for 2^20 counts): at 4 (2^18
  * counts) RTLS stayed within its phi_std; at 16 (2^16) it was 4 phi_std
- * off in mass; at 64 (2^14) 15 % off, the mass claimed at 2.9 %. REFINED
- * chooses its smoother's bandwidth from the data (0.5 % off at 64). */
+ * off in mass; at 64 (2^14) 15 % off, the mass claimed at 2.9 %. REFINED's
+ * smoother takes the measured noise (run_refined; 0.5 % off at 64). */
 #define JOINT_NOISE_TOLERANCE 5.0
 
 static void check_joint_noise(loadid_pipeline_t *p) {
@@ -792,8 +792,8 @@ static void check_joint_noise(loadid_pipeline_t *p) {
     note(p,
          "warning: joints: their positions are %.3g times noisier than the joint filters assume "
          "(%.3g against kalman.meas_sigma %.3g, from their fourth differences over the window; "
-         "a coarser encoder): the filters passed it into %s uncounted, so RLS, RTLS and "
-         "TLS_BATCH on them claim nothing (RIV's instruments and REFINED's smoother hold); "
+         "a coarser encoder): the filters passed it into %s uncounted, so the methods on "
+         "them but RIV (its instruments) and REFINED (its smoother) claim nothing; "
          "kalman.meas_sigma: %.3g fits these joints",
          over, measured, p->cfg.kalman_meas_sigma,
          p->cfg.signals == LOADID_SIGNALS_KF ? "a - g, omega and alpha" : "omega and alpha",
