@@ -11,9 +11,10 @@
 // motion. So it first acquires: a least-squares line through the stamps
 // since (re)start, t = a + b i (i counts periods, a lost message one
 // more), whose gains (about 4 / n for the phase) fall to the loop's g at
-// n = 4 / g stamps, where the loop takes over from the line. A stamp more
-// than half a period off the prediction (a bunched message, another
-// rate) restarts the acquisition there. The periods a stamp is counted
+// n = 4 / g stamps, where the loop takes over from the line. A stamp
+// under half a period after the line's last (a bunched message) restarts
+// the acquisition there; a first interval of kOtherRate periods or more is
+// another rate. The periods a stamp is counted
 // as are those from the line's own time for the last stamp (at first the
 // period the clock started from, from kStampSlopeFrom stamps on the line's
 // slope): counted from the raw interval, a jitter over a quarter period
@@ -25,6 +26,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace loadid {
 
@@ -50,6 +52,13 @@ struct StampLine {
 // Stamps on a line before its slope, not the period it started from,
 // counts their periods.
 constexpr int kStampSlopeFrom = 8;
+
+// Whole periods p from a stamp's predecessor dt before it: the nearest
+// count, so the stamp lies within half a period of it; under 1 (NaN for a
+// period not known) a bunched stamp that fits no count.
+inline double periods_on(double dt, double p) {
+    return p > 0 ? std::round(dt / p) : std::numeric_limits<double>::quiet_NaN();
+}
 
 class StampClock {
   public:
@@ -110,8 +119,8 @@ class StampClock {
         // another rate (a 250 Hz stream for filters set for 1 kHz), not
         // lost messages: its period is that interval.
         if (s.line.n == 1 && !(interval < kOtherRate * p)) s.period = s.base = p = interval;
-        const double k = p > 0 ? std::round((double(t_raw) - s.t) / p) : 0;
-        if (!(k >= 1) || std::abs(double(t_raw) - (s.t + k * p)) > 0.5 * p) {
+        const double k = periods_on(double(t_raw) - s.t, p);
+        if (!(k >= 1)) {
             start(s, t_raw, nominal > 0 ? nominal : interval);
             return;
         }
@@ -164,8 +173,8 @@ inline double stamp_period(const int64_t *t, int n, double p0) {
     for (int j = 1; j <= n; ++j) {
         const double y = double(t[j] - t[0]);
         const double p = counted.n >= kStampSlopeFrom ? counted.slope() : p0;
-        const double k = std::round((y - t_last) / p);
-        if (!(k >= 1) || std::abs(y - (t_last + k * p)) > 0.5 * p) continue;
+        const double k = periods_on(y - t_last, p);
+        if (!(k >= 1)) continue;
         i_last += k;
         counted.add(i_last, y);
         t_last = counted.at(i_last);

@@ -345,18 +345,19 @@ static void model_of(loadid_pipeline_t *p, int m, const loadid_real_t *std, load
     loadid_real_t load_n[16] = {0}, snr[3];
     for (int i = 0; i < 10; ++i) load_n[i] = load[i];
     const int have_snr = loadid_est_signal_to_noise(p->est[m], load_n, snr) == 0;
+    /* Its phi_std does not hold (check_joint_noise): the model as for an
+     * unbounded one, saying why; RIV's instruments are not those columns. */
+    const int unheld =
+        p->joint_over > 0 && m != p->refined_m && p->cfg.methods[m] != LOADID_METHOD_RIV;
+    loadid_real_t unbounded[10];
+    for (int i = 0; i < 10; ++i) unbounded[i] = (loadid_real_t)INFINITY;
     loadid_load_model_t lm;
-    if (loadid_load_model(load, std, have_snr ? snr : NULL, &p->model_cfg, &lm) != 0) return;
-    /* Its phi_std does not hold (check_joint_noise); RIV's instruments
-     * are not those columns. */
-    if (p->joint_over > 0 && m != p->refined_m && p->cfg.methods[m] != LOADID_METHOD_RIV) {
-        loadid_real_t unbounded[10];
-        for (int i = 0; i < 10; ++i) unbounded[i] = (loadid_real_t)INFINITY;
-        if (loadid_load_model(load, unbounded, NULL, &p->model_cfg, &lm) != 0) return;
-        for (int g = 0; g < 3; ++g)
-            if (lm.why[g] == LOADID_WHY_STD)
-                lm.why[g] = LOADID_WHY_JOINT_NOISE, lm.over[g] = (loadid_real_t)p->joint_over;
-    }
+    if (loadid_load_model(load, unheld ? unbounded : std, have_snr ? snr : NULL, &p->model_cfg,
+                          &lm) != 0)
+        return;
+    for (int g = 0; g < 3 && unheld; ++g)
+        if (lm.why[g] == LOADID_WHY_STD)
+            lm.why[g] = LOADID_WHY_JOINT_NOISE, lm.over[g] = (loadid_real_t)p->joint_over;
     for (int i = 0; i < 3; ++i) e->snr[i] = have_snr ? (double)snr[i] : NAN;
     e->has_model = 1;
     e->noise_scale = (double)scale;
