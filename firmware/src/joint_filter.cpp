@@ -313,8 +313,8 @@ extern "C" int loadid_jf_create(int num_joints, const loadid_jf_config_t *cfg, l
     return 0;
 }
 
-extern "C" int loadid_jf_configure(loadid_jf_t *jf, const loadid_jf_config_t *cfg) {
-    if (!jf || !valid_config(cfg)) return -EINVAL;
+// The settle count and the fixed-lag smoother's steady gains of cfg.
+static void derive(loadid_jf_t *jf, const loadid_jf_config_t *cfg) {
     jf->cfg = *cfg;
     jf->settle = loadid::settle_steps(
         *cfg, double(cfg->nominal_step_us > 0 ? cfg->nominal_step_us : 1000) * 1e-6);
@@ -324,7 +324,23 @@ extern "C" int loadid_jf_configure(loadid_jf_t *jf, const loadid_jf_config_t *cf
         for (int i = 0; i <= cfg->lag_steps; ++i)
             for (int c = 0; c < 3; ++c) jf->gain[i][c] = Real(g[i][c]);
     }
+}
+
+extern "C" int loadid_jf_configure(loadid_jf_t *jf, const loadid_jf_config_t *cfg) {
+    if (!jf || !valid_config(cfg)) return -EINVAL;
+    derive(jf, cfg);
     return loadid_jf_reset(jf);
+}
+
+extern "C" int loadid_jf_retune(loadid_jf_t *jf, loadid_real_t meas_sigma, int lag_steps) {
+    if (!jf) return -EINVAL;
+    loadid_jf_config_t c = jf->cfg;
+    c.meas_sigma = meas_sigma;
+    c.lag_steps = lag_steps;
+    if (!valid_config(&c)) return -EINVAL;
+    derive(jf, &c);
+    for (LagEntry &e : jf->ring) e.terms = -1; // sums of the old gains
+    return 0;
 }
 
 extern "C" void loadid_jf_destroy(loadid_jf_t *jf) {

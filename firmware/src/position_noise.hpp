@@ -40,6 +40,8 @@ class PositionNoise {
         n_ = n;
     }
 
+    int64_t count() const { return count_; } // differences since reset
+
     // The largest joint's std [rad or m]; 0 with fewer than kMinCount.
     double sigma() const {
         if (count_ < kMinCount) return 0;

@@ -290,8 +290,26 @@ extern "C" double loadid_signals_position_noise(const loadid_signals_t *s) {
     return s ? s->position_noise.sigma() : 0;
 }
 
+extern "C" int64_t loadid_signals_position_noise_count(const loadid_signals_t *s) {
+    return s ? s->position_noise.count() : 0;
+}
+
 extern "C" void loadid_signals_position_noise_reset(loadid_signals_t *s) {
     if (s) s->position_noise.reset();
+}
+
+extern "C" int loadid_signals_retune(loadid_signals_t *s, double meas_sigma, int64_t lag_us) {
+    if (!s || s->period_us <= 0 || lag_us < 0) return -EINVAL;
+    loadid_jf_config_t &c = s->cfg.measured;
+    int lag = c.lag_steps;
+    if (lag > 0)
+        lag = int(std::clamp<int64_t>(std::llround(double(lag_us) / double(s->period_us)), lag,
+                                      LOADID_JF_MAX_LAG));
+    const int rc = loadid_jf_retune(s->measured, loadid_real_t(meas_sigma), lag);
+    if (rc != 0) return rc;
+    c.meas_sigma = loadid_real_t(meas_sigma);
+    c.lag_steps = lag;
+    return loadid_jf_settle_steps(s->measured);
 }
 
 extern "C" double loadid_signals_stream_period_us(const loadid_signals_t *s) {

@@ -1,7 +1,8 @@
 /*
  * The per-sample path of the core (update and estimate of every method,
  * both parameter counts, including RTLS's initial SVD and its rank-growing
- * branch; joint states into the Kalman filters, the signal sources with
+ * branch; joint states into the Kalman filters, their retuning to a measured
+ * encoder noise, the signal sources with
  * forward kinematics, and their refusals; the offline smoother on a
  * caller's work space) performs no heap allocation, takes no lock and makes
  * no system call:
@@ -124,6 +125,13 @@ static int signals_run(workload_t *w) {
                 ++bad;
             loadid_kin_state_t st;
             if (loadid_signals_kinematics_at(w->sig, w->t_us[k], &st) != 0) ++bad;
+            /* The pipeline's retune (coarser encoders): their noise, and the
+             * filters' and the smoother's gains derived again in place. */
+            if (loadid_signals_position_noise_count(w->sig) <= 0 ||
+                !(loadid_signals_position_noise(w->sig) >= 0))
+                ++bad;
+            if (loadid_signals_retune(w->sig, 1e-4, 0) <= 0) ++bad;
+            if (loadid_signals_retune(w->sig_lag, 1e-4, 20000) <= 0) ++bad;
         }
     }
     loadid_jf_config_t jcfg;

@@ -544,11 +544,53 @@ static void position_noise_is_measured(void **state) {
         if (kind == 0) assert_true(got < 1e-9); /* the motion alone */
         if (kind == 1 || kind == 2) ASSERT_CLOSE(got, sigma, 0.1 * sigma, "white noise");
         if (kind == 3) ASSERT_CLOSE(got, step / sqrt(12), 0.1 * step / sqrt(12), "quantised");
+        /* One difference a state from the fifth of each piece (31 states lost: 32 pieces). */
+        assert_int_equal(loadid_signals_position_noise_count(s),
+                         kind == 2 ? 3000 - 31 - 4 * 32 : 3000 - 4);
         loadid_signals_position_noise_reset(s);
         assert_true(loadid_signals_position_noise(s) == 0);
+        assert_int_equal(loadid_signals_position_noise_count(s), 0);
+        /* The measured bank takes the noise; the states stay (the causal
+         * filter: no lag to lengthen). */
+        loadid_jf_config_t c;
+        loadid_regressor_input_t before, after;
+        const int64_t t = 2998000;
+        assert_int_equal(loadid_signals_at(s, t, NULL, NULL, NULL, &before, NULL), 0);
+        const int settle = loadid_signals_retune(s, step / sqrt(12), 200000);
+        assert_true(settle > 0);
+        assert_int_equal(loadid_signals_filter_config(s, &c), 0);
+        assert_true(c.meas_sigma == (loadid_real_t)(step / sqrt(12)));
+        assert_int_equal(c.lag_steps, 0);
+        assert_int_equal(loadid_signals_at(s, t, NULL, NULL, NULL, &after, NULL), 0);
+        assert_memory_equal(&before, &after, sizeof before);
+        assert_int_equal(loadid_signals_retune(s, 0, 0), -EINVAL);
+        assert_int_equal(loadid_signals_retune(s, NAN, 0), -EINVAL);
+        assert_int_equal(loadid_signals_retune(s, 1e-4, -1), -EINVAL);
+        assert_int_equal(loadid_signals_filter_config(s, &c), 0);
+        assert_true(c.meas_sigma == (loadid_real_t)(step / sqrt(12)));
         loadid_signals_destroy(s);
     }
+    /* With the fixed-lag smoother at a probed 4 ms: the lag in periods,
+     * never shorter than it was, at most LOADID_JF_MAX_LAG; none while
+     * the period is probed. */
+    loadid_signals_t *s = make_probing(8, 20000);
+    loadid_real_t q[3 * NJ];
+    assert_int_equal(loadid_signals_retune(s, 1e-4, 60000), -EINVAL);
+    for (int k = 0; k < 40; ++k) {
+        quad_at(&kMeasured, seconds(4000LL * k), q);
+        assert_int_equal(loadid_signals_push_joints(s, 4000LL * k, NJ, q, NULL), 0);
+    }
+    loadid_jf_config_t c;
+    const int64_t lags_us[4] = {60000, 1000, 1000000000, 0}, steps[4] = {15, 15, 200, 200};
+    for (int i = 0; i < 4; ++i) {
+        assert_true(loadid_signals_retune(s, 1e-4, lags_us[i]) > 0);
+        assert_int_equal(loadid_signals_filter_config(s, &c), 0);
+        assert_int_equal(c.lag_steps, steps[i]);
+    }
+    loadid_signals_destroy(s);
     assert_true(loadid_signals_position_noise(NULL) == 0);
+    assert_int_equal(loadid_signals_position_noise_count(NULL), 0);
+    assert_int_equal(loadid_signals_retune(NULL, 1e-4, 0), -EINVAL);
     loadid_signals_position_noise_reset(NULL);
 }
 

@@ -86,6 +86,14 @@ void loadid_jf_destroy(loadid_jf_t *jf);
  * unchanged). */
 int loadid_jf_configure(loadid_jf_t *jf, const loadid_jf_config_t *cfg);
 
+/* Another measurement noise (the positions measured noisier than
+ * configured) and fixed lag, from the next update on: the gains and settle
+ * count derived again, the filters' states and the smoother's updates kept
+ * (their next settle updates blend the old gains' errors out; a longer lag
+ * serves later). Allocates nothing. Returns 0 or -EINVAL (NULL, a
+ * meas_sigma or lag_steps create would refuse; jf then unchanged). */
+int loadid_jf_retune(loadid_jf_t *jf, loadid_real_t meas_sigma, int lag_steps);
+
 /* Forgets every measurement. Returns 0 or -EINVAL. */
 int loadid_jf_reset(loadid_jf_t *jf);
 
