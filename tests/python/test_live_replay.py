@@ -27,9 +27,10 @@ import numpy as np
 import pytest
 
 from alloc_report import counts, loop_sites
-from recordings import program
+from recordings import program, simulate
 from test_live_lcm import run_in_netns
 from test_live_no_alloc import counted
+from test_offline import write_config
 from test_plot import png_size, read_rows
 
 NAMES = {1: "RLS", 2: "RIV", 3: "RTLS", 6: "REFINED"}
@@ -259,3 +260,39 @@ def test_sigterm_while_refined_runs_waits_for_it(recording, offline, tmp_path):
     assert re.search(r"^method: REFINED$", text, re.M), text
     phi = json.loads(re.search(r"^phi: (\[.*\])$", text, re.M).group(1))
     np.testing.assert_allclose(phi, offline["result"]["REFINED"]["phi"], rtol=1e-9, atol=1e-12)
+
+
+def test_coarse_encoders_retuned_live_as_offline(config, trajectory, tmp_path):
+    """Encoders of 2^14 counts a turn (test_offline.py's
+    test_coarse_encoders_retune_the_joint_filters), replayed live: the
+    joint filters take the measured noise and the fixed-lag smoother a
+    longer lag early in the window, as --offline does, and the final
+    estimates equal --offline's to 1e-9. The live clock waits for the lag
+    as it runs before it serves a sample (with the configured 50 ms it would
+    have refused the samples the longer lag had not yet smoothed); the loop
+    allocates nothing meanwhile (release build)."""
+    rec = simulate(tmp_path / "rec", trajectory, "--seed", "3", "--config",
+                   write_config(tmp_path / "sim.yaml", "simulation:\n  encoder_counts: 16384\n"))
+    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(config), "--offline", str(rec),
+                        "--verbose"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    retuned = re.search(r"joints: their positions are [0-9.]+ times noisier .* the fixed-lag "
+                        r"smoother (\d+) steps \(was 50\)", r.stderr)
+    assert retuned and int(retuned.group(1)) > 100, r.stderr
+    offline = {o["method"]: o for o in json.loads(r.stdout)}
+
+    def run():
+        return run_in_netns("replay_session.py", program("LOADIDD_EXE"), config, rec,
+                            os.environ["LOADID_LCM_PYTHON_DIR"])
+    s = counted(tmp_path, run) if os.environ.get("LOADID_ALLOC_COUNT_LIB") else run()
+    assert s["returncode"] == 0, s["stderr"]
+    assert retuned.group(0) in s["stderr"], s["stderr"]
+    finals = [e for e in s["estimate"] if e["state"] == 3]
+    assert sorted(e["method"] for e in finals) == [1, 2, 3, 6], s["stderr"]
+    for e in finals:
+        o = offline[NAMES[e["method"]]]
+        assert e["samples"] == o["samples"], (e["samples"], o["samples"])
+        np.testing.assert_allclose(e["phi"], o["phi"], rtol=1e-9, atol=1e-12)
+    if "report" in s:
+        assert counts(s["report"])["loop_allocations"] == 0, "\n".join(
+            loop_sites(s["report"], program("LOADIDD_EXE")))

@@ -178,6 +178,7 @@ static void assert_defaults(const loadid_config_t *c) {
     ASSERT_EQ_D(c->kalman_jerk_psd, 1.0);
     const double sigma = 2 * 3.14159265358979323846 / 1048576.0 / sqrt(12.0);
     assert_true(fabs(c->kalman_meas_sigma - sigma) <= 1e-6 * sigma);
+    assert_int_equal(c->noise_given & LOADID_NOISE_GIVEN_KF_MEAS, 0); /* auto: retuned */
     ASSERT_EQ_D(c->kalman_max_joint_age_s, 0.005);
     ASSERT_EQ_D(c->kalman_joint_period_s, 0); /* auto: measured */
     ASSERT_EQ_D(c->kalman_joint_delay_s, 0);
@@ -392,6 +393,7 @@ static void every_key_is_read(void **state) {
     ASSERT_EQ_D(c.omega_typical, 3);
     ASSERT_EQ_D(c.kalman_jerk_psd, 5000);
     ASSERT_EQ_D(c.kalman_meas_sigma, 1e-5);
+    assert_true(c.noise_given & LOADID_NOISE_GIVEN_KF_MEAS); /* kept as given */
     ASSERT_EQ_D(c.kalman_max_joint_age_s, 0.002);
     ASSERT_EQ_D(c.kalman_joint_period_s, 0.004);
     ASSERT_EQ_D(c.kalman_joint_delay_s, -0.003);
@@ -681,6 +683,8 @@ static void wrong_lengths_and_values(void **state) {
     expect_error("estimation:\n  max_missing_share: -1\n",
                  "2: estimation.max_missing_share: must be >= 0, got -1");
     expect_error("kalman:\n  meas_sigma: 0\n", "2: kalman.meas_sigma: must be > 0, got 0");
+    expect_error("kalman:\n  meas_sigma: fine\n",
+                 "2: kalman.meas_sigma: expected a number > 0 or auto");
     expect_error("kalman:\n  joint_period_s: fast\n",
                  "2: kalman.joint_period_s: expected a period in seconds > 0 or auto");
     expect_error("kalman:\n  joint_period_s: -0.001\n",

@@ -184,7 +184,11 @@ typedef struct {
     /* kalman: (loadid) the joint filters (loadid/joint_filter.h) */
     double kalman_jerk_psd;        /* default 10 (behind the fixed-lag smoother;
                                            1e3 for the causal filter, lag_s 0) */
-    double kalman_meas_sigma;      /* default: loadid_jf_config_default */
+    double kalman_meas_sigma;      /* the encoders' noise [rad or m]; default
+                                           (or auto): loadid_jf_config_default's,
+                                           raised to the measured when the joint
+                                           positions are noisier (pipeline.c,
+                                           retune_joint_filters) */
     double kalman_max_joint_age_s; /* default 0.005 */
     double kalman_lag_s;           /* kalman.lag_s: the on-line fixed-lag
                                            smoother's lag [s]: the estimators run
@@ -306,8 +310,9 @@ enum {
     LOADID_NOISE_GIVEN_LINEAR = 1 << 2,
     LOADID_NOISE_GIVEN_ANGULAR = 1 << 3,
     LOADID_NOISE_GIVEN_OMEGA = 1 << 4,
-    LOADID_NOISE_GIVEN_KF_SPEC = 1 << 5, /* kalman.spec_sigma */
-    LOADID_NOISE_GIVEN_KF_ALPHA = 1 << 6 /* kalman.alpha_sigma */
+    LOADID_NOISE_GIVEN_KF_SPEC = 1 << 5,  /* kalman.spec_sigma */
+    LOADID_NOISE_GIVEN_KF_ALPHA = 1 << 6, /* kalman.alpha_sigma */
+    LOADID_NOISE_GIVEN_KF_MEAS = 1 << 7   /* kalman.meas_sigma */
 };
 
 /* Fills cfg with every default (robot_urdf: the shipped RX60, given the

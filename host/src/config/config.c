@@ -568,7 +568,7 @@ static int read_estimation(loadid_yaml_node_t *root, const char *path, loadid_co
 
     TRY(read_section(root, "kalman", &s));
     TRY(read_number(s, "jerk_psd", &c->kalman_jerk_psd, POSITIVE));
-    TRY(read_number(s, "meas_sigma", &c->kalman_meas_sigma, POSITIVE));
+    TRY(read_level(s, "meas_sigma", &c->kalman_meas_sigma, LOADID_NOISE_GIVEN_KF_MEAS, c));
     TRY(read_number(s, "max_joint_age_s", &c->kalman_max_joint_age_s, POSITIVE));
     TRY(read_number(s, "lag_s", &c->kalman_lag_s, NON_NEGATIVE));
     if (read_number(s, "joint_delay_s", &c->kalman_joint_delay_s, ANY) == 1 &&

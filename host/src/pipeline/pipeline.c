@@ -93,6 +93,7 @@ struct loadid_pipeline {
     double zero_kin_sum[6], zero_kin_t_sum;
     double noise_corr[2]; /* the zeroing window's (set_zeroing_noise) */
     double joint_over;    /* levels.joint_position over kalman.meas_sigma; 0 within tolerance */
+    int64_t feed_from_us; /* rows before it wait for the joint filters (retune_joint_filters) */
     double tone_share[2], tone_hz[2]; /* a - g, alpha (measure_tones) */
     /* the notch on the rows against those tones (notch.h; no stages: none),
      * its frequencies per column group (0: none) and the still window's
@@ -150,6 +151,9 @@ struct loadid_pipeline {
 
 static void flush_pending(loadid_pipeline_t *p, int64_t before, int ready);
 static int refined_busy(loadid_pipeline_t *p);
+static void restart_rows(loadid_pipeline_t *p);
+static void apply_measured_noise(loadid_pipeline_t *p);
+static void reset_drift(loadid_pipeline_t *p);
 
 static void note(loadid_pipeline_t *p, const char *fmt, ...) {
     if (!p->sink.log) return;
@@ -772,7 +776,9 @@ static void check_drift(loadid_pipeline_t *p) {
 }
 
 /* The joint positions' own noise over the window against the joint
- * filters' kalman.meas_sigma: beyond this factor the filters passed noise
+ * filters' meas_sigma (kalman.meas_sigma, or the measured one
+ * retune_joint_filters gave them early in the window; a robot still at
+ * first, or a configured level): beyond this factor the filters passed noise
  * into a - g, omega and alpha (kf; omega and alpha for mixed) that the
  * weights and phi_std of RLS, RTLS, LS_BATCH and TLS_BATCH do not count (RIV's
  * instruments are not those columns: 0.2 % off at 64). On the simulated
@@ -785,18 +791,20 @@ static void check_drift(loadid_pipeline_t *p) {
 static void check_joint_noise(loadid_pipeline_t *p) {
     const double measured = p->levels.joint_position = loadid_signals_position_noise(p->sig);
     p->joint_over = 0;
-    const double over = measured / p->cfg.kalman_meas_sigma;
+    loadid_jf_config_t c; /* kalman.meas_sigma, or what retune_joint_filters set */
+    if (loadid_signals_filter_config(p->sig, &c) != 0) return;
+    const double over = measured / (double)c.meas_sigma;
     if (!(over > JOINT_NOISE_TOLERANCE) ||
         !(p->cfg.signals == LOADID_SIGNALS_KF || p->cfg.signals == LOADID_SIGNALS_MIXED))
         return;
     p->joint_over = over;
     note(p,
          "warning: joints: their positions are %.3g times noisier than the joint filters assume "
-         "(%.3g against kalman.meas_sigma %.3g, from their fourth differences over the window; "
+         "(%.3g against %.3g, from their fourth differences over the window; "
          "a coarser encoder): the filters passed it into %s uncounted, so the methods on "
          "them but RIV (its instruments) and REFINED (its smoother) claim nothing; "
          "kalman.meas_sigma: %.3g fits these joints",
-         over, measured, p->cfg.kalman_meas_sigma,
+         over, measured, (double)c.meas_sigma,
          p->cfg.signals == LOADID_SIGNALS_KF ? "a - g, omega and alpha" : "omega and alpha",
          measured);
 }
@@ -1027,7 +1035,13 @@ static void end_stalled_piece(loadid_pipeline_t *p, int64_t now_us) {
 }
 
 void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us) {
-    const int64_t grace = TICK_GRACE_US + llround(p->cfg.kalman_lag_s * 1e6);
+    /* kalman.lag_s, or the smoother's as it runs when retune_joint_filters
+     * lengthened it */
+    int64_t lag = llround(p->cfg.kalman_lag_s * 1e6);
+    loadid_jf_config_t c;
+    if (loadid_signals_filter_config(p->sig, &c) == 0 && c.lag_steps * c.nominal_step_us > lag)
+        lag = c.lag_steps * c.nominal_step_us;
+    const int64_t grace = TICK_GRACE_US + lag;
     end_stalled_piece(p, now_us);
     flush_pending(p, now_us - grace, 0); /* joints stopped: serve (or refuse) them */
     advance(p, now_us - grace);
@@ -1071,6 +1085,61 @@ static void note_joint_period(loadid_pipeline_t *p) {
              stream, ms);
 }
 
+/* Early in the window the joint positions' own noise (their fourth
+ * differences since START) against what the measured-position filters
+ * assume: over JOINT_RETUNE_FACTOR times (a coarser encoder than
+ * kalman.meas_sigma's default of 2^20 counts) and with kalman.meas_sigma
+ * auto, the filters take the measured noise from the next joint state on,
+ * the on-line estimators start again with rows from once the filters have
+ * settled on it, and their weights take the filters' new levels. The
+ * smoother's bandwidth falls as the noise's cube root, its time constant
+ * grows so, and so does its lag (to at most JOINT_RETUNE_MAX_LAG_S): on the
+ * RX60 with 2^14 counts (88 times) RTLS was 14 % off in mass with the
+ * filters left at 2^20 (refused at DONE, check_joint_noise); retuned with
+ * the 50 ms lag its COM was 3.5 times REF's error, with 150 ms 0.9 times.
+ * Tried from JOINT_RETUNE_DIFFS differences (about 30 % error in the
+ * noise: a factor of 3 is not mistaken) to JOINT_RETUNE_S after START, as
+ * long as a restart leaves most of the window: a robot starting from rest
+ * shows its encoder steps only once it moves through them. A configured
+ * kalman.meas_sigma is kept (and check_joint_noise judges the run by it). */
+#define JOINT_RETUNE_FACTOR 3.0
+#define JOINT_RETUNE_DIFFS 32
+#define JOINT_RETUNE_S 0.4
+#define JOINT_RETUNE_MAX_LAG_S 0.2
+
+static void retune_joint_filters(loadid_pipeline_t *p) {
+    if (p->state != LOADID_STATE_ESTIMATING || (p->cfg.noise_given & LOADID_NOISE_GIVEN_KF_MEAS) ||
+        p->cfg.signals == LOADID_SIGNALS_SETPOINT ||
+        loadid_signals_position_noise_count(p->sig) < JOINT_RETUNE_DIFFS)
+        return;
+    const int64_t now = loadid_signals_newest_joint_time(p->sig);
+    loadid_jf_config_t c, n;
+    if (now - p->start_us > (int64_t)llround(JOINT_RETUNE_S * 1e6) ||
+        loadid_signals_filter_config(p->sig, &c) != 0)
+        return;
+    const double measured = loadid_signals_position_noise(p->sig);
+    const double over = measured / (double)c.meas_sigma;
+    if (!(over > JOINT_RETUNE_FACTOR)) return;
+    double lag_us = (double)c.lag_steps * (double)c.nominal_step_us * cbrt(over);
+    if (lag_us > JOINT_RETUNE_MAX_LAG_S * 1e6) lag_us = JOINT_RETUNE_MAX_LAG_S * 1e6;
+    const int settle = loadid_signals_retune(p->sig, measured, llround(lag_us));
+    if (settle < 0 || loadid_signals_filter_config(p->sig, &n) != 0) return;
+    restart_rows(p);
+    p->feed_from_us = now + settle * c.nominal_step_us;
+    filter_noise(p);
+    apply_measured_noise(p);
+    reset_drift(p);
+    note(p,
+         "joints: their positions are %.3g times noisier than the joint filters assumed (%.3g "
+         "against %.3g, from %lld fourth differences since START; a coarser encoder): the "
+         "filters take %.3g from here on (kalman.meas_sigma auto), the fixed-lag smoother %d "
+         "steps (was %d), and the on-line estimators start again from %.3f s after START, once "
+         "the filters have settled on it",
+         over, measured, (double)c.meas_sigma,
+         (long long)loadid_signals_position_noise_count(p->sig), measured, n.lag_steps, c.lag_steps,
+         (double)(p->feed_from_us - p->start_us) / 1e6);
+}
+
 void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_joints,
                                  const double *position, const double *setpoint) {
     loadid_real_t pos[LOADID_MAX_JOINTS], set[LOADID_MAX_JOINTS];
@@ -1093,6 +1162,7 @@ void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_jo
          * clock: none while the joint period is being measured. */
         if (p->refined && !refined_busy(p) && newest != INT64_MIN)
             loadid_refined_joint(p->refined, newest, pos);
+        retune_joint_filters(p);
         flush_pending(p, INT64_MIN, 1);
     }
 }
@@ -1127,21 +1197,34 @@ int loadid_pipeline_refined_pending(loadid_pipeline_t *p) {
     return refined_busy(p);
 }
 
-static void reset_run(loadid_pipeline_t *p) {
+/* The on-line estimators and what they are fed start from no rows. */
+static void restart_rows(loadid_pipeline_t *p) {
     p->rescaled = 0;
     p->row_rescale[0] = p->row_rescale[1] = p->row_rescale[2] = 1;
-    /* A new run waits for the last one's REFINED (and publishes it). */
-    if (p->worker && loadid_worker_wait(p->worker)) collect_refined(p);
     for (int m = 0; m < p->num_methods; ++m) loadid_est_reset(p->est[m]);
     p->samples_used = 0;
     p->since_publish = 0;
     p->have_row = 0;
     p->primary = -1;
-    p->refined_ran = 0;
     p->drift_significant = 0;
+    p->feed_from_us = INT64_MIN;
     loadid_spectrum_rows_reset(p->rows);
     loadid_notch_bank_restart(&p->notch);
+}
+
+static void reset_run(loadid_pipeline_t *p) {
+    /* A new run waits for the last one's REFINED (and publishes it). */
+    if (p->worker && loadid_worker_wait(p->worker)) collect_refined(p);
+    restart_rows(p);
+    p->refined_ran = 0;
     if (p->refined) loadid_refined_start(p->refined);
+}
+
+static void reset_drift(loadid_pipeline_t *p) {
+    if (p->n_params == LOADID_NPHI)
+        loadid_drift_check_reset(&p->drift,
+                                 p->zero_t_first_us + llround(p->zero_t_sum / (double)p->zero_n),
+                                 p->levels.force, p->levels.torque);
 }
 
 /* START: the noise levels measured so far (the zeroing window, else the
@@ -1281,10 +1364,7 @@ static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const c
             loadid_signals_position_noise_reset(p->sig);
             p->joint_over = 0;
             apply_measured_noise(p); /* levels.joint_position 0 until DONE */
-            if (p->n_params == LOADID_NPHI)
-                loadid_drift_check_reset(
-                    &p->drift, p->zero_t_first_us + llround(p->zero_t_sum / (double)p->zero_n),
-                    p->levels.force, p->levels.torque);
+            reset_drift(p);
             {
                 loadid_signals_stats_t s;
                 loadid_signals_stats(p->sig, &s);
@@ -1476,6 +1556,7 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
     /* REFINED pairs the wrench with its own smoothed kinematics, and the
      * trace the wrench with the motion: both take it as measured. */
     if (p->refined) loadid_refined_sample(p->refined, s->t_us, y, lin, ang);
+    if (s->t_us < p->feed_from_us) return; /* the joint filters settling (retune_joint_filters) */
     if (p->trace_rows) memcpy(p->row_y, y, sizeof p->row_y);
     if (p->notch.stages > 0) { /* the same filter on both sides: A phi = y still */
         loadid_notch_bank_apply(&p->notch, LOADID_NOTCH_A, 6 * p->n_params, A);
