@@ -6,7 +6,7 @@
 // h / sqrt(12); the joint filters assume kalman.meas_sigma, and a stream
 // much noisier than that (a coarser encoder) reaches a - g, omega and
 // alpha uncounted. A step over 1.5 periods (a lost state) starts the
-// differences again. No allocation.
+// differences again, and so does a refused state (gap()). No allocation.
 #pragma once
 
 #include <cmath>
@@ -41,6 +41,9 @@ class PositionNoise {
     }
 
     int64_t count() const { return count_; } // differences since reset
+
+    // A state left out (refused): the differences start again after it.
+    void gap() { have_ = 0; }
 
     // The largest joint's std [rad or m]; 0 with fewer than kMinCount.
     double sigma() const {

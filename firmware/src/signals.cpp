@@ -201,9 +201,11 @@ int feed(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *p
     if (rc == 0 && setpoint) rc = loadid_jf_update(s->setpoint, t_us, setpoint);
     if (rc != 0) {
         ++s->stats.joint_msgs_bad;
+        s->position_noise.gap(); // the positions go on after a hole
         return rc;
     }
     s->clock.commit();
+    s->stats.stamp_restarts = s->clock.restarts();
     s->position_noise.add(t_us, position, s->n, s->period_us);
     ++s->stats.joint_msgs_ok;
     s->piece_ended = false;

@@ -347,7 +347,7 @@ def test_live_estimates_equal_offline_on_the_frames_received(vm, recorded, tmp_p
     assert r.returncode == 0, r.stderr
     off = summary(r.stderr)
     # Offline's counts (the pipeline's) are the live daemon's, one by one.
-    assert len(off) == 9 and {k: live.get(k) for k in off} == off, (off, live)
+    assert len(off) == 10 and {k: live.get(k) for k in off} == off, (off, live)
     offline = {o["method"]: o for o in json.loads(r.stdout)}
     finals = live_finals(vm)
     assert sorted(offline) == sorted(finals), (sorted(offline), sorted(finals))

@@ -46,6 +46,9 @@ static void test_each_reason_in_words(void **state) {
         {0, LOADID_WHY_JOINT_NOISE, 67.6,
          "the joint positions are 67.6 times noisier than kalman.meas_sigma: phi_std does not "
          "count what the joint filters passed on"},
+        {1, LOADID_WHY_JOINT_STAMPS, 19,
+         "the joint stamps lost the stream's rate 19 times in the window: phi_std does not "
+         "count the joint states taken at wrong times"},
     };
     char out[160];
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {

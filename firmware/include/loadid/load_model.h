@@ -54,12 +54,13 @@ enum { LOADID_IDENT_MASS = 1, LOADID_IDENT_COM = 2, LOADID_IDENT_INERTIA = 4 };
 /* Why a group is not identified (why[] of loadid_load_model_t). */
 typedef enum {
     LOADID_WHY_IDENTIFIED = 0,
-    LOADID_WHY_NO_MASS,    /* m <= 0: no load */
-    LOADID_WHY_STD,        /* its std over the bound (over: std / bound) */
-    LOADID_WHY_NEEDS,      /* COM without the mass, inertia without the COM */
-    LOADID_WHY_GYRATION,   /* radius of gyration over max_gyration (over: r / max) */
-    LOADID_WHY_SNR,        /* its torque under min_snr times the noise (over: min_snr / snr) */
-    LOADID_WHY_JOINT_NOISE /* the joints noisier than the filters assume (over: that factor) */
+    LOADID_WHY_NO_MASS,     /* m <= 0: no load */
+    LOADID_WHY_STD,         /* its std over the bound (over: std / bound) */
+    LOADID_WHY_NEEDS,       /* COM without the mass, inertia without the COM */
+    LOADID_WHY_GYRATION,    /* radius of gyration over max_gyration (over: r / max) */
+    LOADID_WHY_SNR,         /* its torque under min_snr times the noise (over: min_snr / snr) */
+    LOADID_WHY_JOINT_NOISE, /* the joints noisier than the filters assume (over: that factor) */
+    LOADID_WHY_JOINT_STAMPS /* the joint stamps lost their rate (over: how often in the window) */
 } loadid_ident_why_t;
 
 typedef struct {

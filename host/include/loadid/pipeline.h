@@ -138,8 +138,9 @@ typedef struct {
                                      (status_t.samples_saturated) */
     int64_t sequence_gaps;
     int64_t joint_msgs_bad;
-    int64_t samples_stale;    /* no joint state close enough */
-    int64_t estimator_errors; /* updates refused (non-finite input, full) */
+    int64_t joint_stamp_restarts; /* loadid_signals_stats_t's stamp_restarts */
+    int64_t samples_stale;        /* no joint state close enough */
+    int64_t estimator_errors;     /* updates refused (non-finite input, full) */
     /* The last estimation run, once it ended: */
     int complete;                /* 1: ZERO (when zeroing) and START seen, the
                                      window ran to its end (or STOP), F/T

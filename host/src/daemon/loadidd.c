@@ -200,12 +200,13 @@ static int run_offline(const loadid_config_t *cfg, const loadid_chain_t *chain, 
     if (verbose)
         fprintf(stderr,
                 "%s: samples ok %lld, used %lld, frames bad %lld, incomplete %lld, saturated %lld, "
-                "faulty %lld, gaps %lld, joint msgs bad %lld, stale %lld\n",
+                "faulty %lld, gaps %lld, joint msgs bad %lld, stale %lld, joint stamp restarts "
+                "%lld\n",
                 prog, (long long)st.samples_ok, (long long)st.samples_used,
                 (long long)st.frames_bad, (long long)st.samples_incomplete,
                 (long long)st.samples_saturated, (long long)st.samples_faulty,
                 (long long)st.sequence_gaps, (long long)st.joint_msgs_bad,
-                (long long)st.samples_stale);
+                (long long)st.samples_stale, (long long)st.joint_stamp_restarts);
     if (verbose)
         fprintf(stderr,
                 "%s: lcm.log: %lld events (joint states %lld, commands %lld, other %lld), "

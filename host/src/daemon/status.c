@@ -55,12 +55,13 @@ void loadid_status_summary(const loadid_pipeline_status_t *st, const loadid_inpu
     loadidd_log(
         "samples ok %lld, used %lld, frames bad %lld, incomplete %lld, saturated %lld, "
         "faulty %lld, gaps %lld, joint msgs bad %lld, stale %lld, CAN errors %lld, "
-        "CAN drops %lld, error frames %lld, commands refused %lld",
+        "CAN drops %lld, error frames %lld, joint stamp restarts %lld, commands refused %lld",
         (long long)st->samples_ok, (long long)st->samples_used, (long long)st->frames_bad,
         (long long)st->samples_incomplete, (long long)st->samples_saturated,
         (long long)st->samples_faulty, (long long)st->sequence_gaps, (long long)st->joint_msgs_bad,
         (long long)st->samples_stale, (long long)in->errors, (long long)in->drops,
-        (long long)in->error_frames, (long long)commands_refused);
+        (long long)in->error_frames, (long long)st->joint_stamp_restarts,
+        (long long)commands_refused);
     if (in->late_measured) /* every backend measures it */
         loadidd_log(
             "samples late %lld (handled more than %.0f ms after arrival), worst "

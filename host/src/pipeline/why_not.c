@@ -51,6 +51,12 @@ int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char
                      "phi_std does not count what the joint filters passed on",
                      over);
             break;
+        case LOADID_WHY_JOINT_STAMPS:
+            snprintf(out, len,
+                     "the joint stamps lost the stream's rate %.0f times in the window: phi_std "
+                     "does not count the joint states taken at wrong times",
+                     over);
+            break;
         default: /* not kept: a result restored from its saved YAML */
             snprintf(out, len, "not identified (no reason kept)");
             break;
