@@ -206,6 +206,7 @@ int feed(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *p
     }
     s->clock.commit();
     s->stats.stamp_restarts = s->clock.restarts();
+    s->stats.stamp_acquiring = s->clock.acquiring();
     s->position_noise.add(t_us, position, s->n, s->period_us);
     ++s->stats.joint_msgs_ok;
     s->piece_ended = false;

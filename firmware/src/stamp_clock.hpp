@@ -91,6 +91,9 @@ class StampClock {
     // Stamps that fitted neither the line nor the loop (neither the next
     // period nor whole periods on): the clock started again from them.
     int64_t restarts() const { return s_.restarts; }
+    // Taking the stamps from their line: not locked yet (since start or
+    // the last restart).
+    bool acquiring() const { return s_.last_raw != INT64_MIN && s_.acquiring; }
 
     // The time to use for t_raw; nominal: the period to start from [us]
     // (the filters'). The clock takes the stamp only at commit(), once the
@@ -152,12 +155,18 @@ class StampClock {
         // lost messages: its period is that interval.
         if (s.line.n == 1 && !(interval < kOtherRate * p)) s.period = s.base = p = interval;
         // Counted as the nearest whole periods, but for an outlier: a
-        // stamp between the next period and the one after (delayed, or one
-        // lost?) that is not clean; a longer gap is lost messages (a
-        // stall), counted with the period as known so far.
+        // stamp bunched, or between the next period and the one after
+        // (delayed, or one lost?), not clean; a longer gap is lost messages
+        // (a stall), counted with the period as known so far. While the
+        // line has under kStampSlopeFrom stamps its time is as jittered as
+        // they are, and an outlier is the next period, on the line: taken
+        // off it, 450 us of jitter at 1 kHz made three in a row and
+        // restarted the line again and again, and the stamps of a whole
+        // second were as jittered as the raw ones.
         const double dt = double(t_raw) - s.t;
         double k = periods_on(dt, p);
-        if (s.line.n >= 2 && k <= 2 && k != periods_of(dt, p)) k = 0;
+        if (s.line.n >= 2 && k <= 2 && periods_of(dt, p) == 0)
+            k = s.line.n < kStampSlopeFrom ? 1 : 0;
         if (!(k >= 1)) {
             if (s.line.n >= 2 && next(s)) {
                 s.i += 1;

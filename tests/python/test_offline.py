@@ -1098,11 +1098,32 @@ def test_joint_stamps_delayed_in_transport(recording, tmp_path, lcmtypes):
                           "--verbose")
     said = re.search(r"warning: joints: their stamps lost the stream's rate (\d+) times in the "
                      r"window .* no method claims anything", err)
-    assert said and int(said.group(1)) >= 3, err
+    assert said and int(said.group(1)) >= 10, err
     for est in result:
         assert est["identified"] == [], (est["method"], est["identified"])
         assert est["not_identified"]["mass"].startswith(
             f"the joint stamps lost the stream's rate {said.group(1)} times"), est
+
+
+def test_half_a_period_of_stamp_jitter(trajectory, tmp_path):
+    """Joint stamps jittered by up to 450 us at 1 kHz (uniform; seed 2):
+    the stamp clock's line took each outlier off itself while it had under
+    8 stamps, so three in a row restarted it again and again, the stamps of
+    a whole second were as jittered as the raw ones, and RTLS and RLS were
+    3.8 % off in mass, claimed. Counted one apart on the line there, they
+    are within the bounds (0.22 % seen); the one restart before START that
+    had not locked again voids the claims (check_joint_stamps), and no
+    claim is wrong."""
+    rec = simulate(tmp_path / "rec", trajectory, "--seed", "2", "--config",
+                   write_config(tmp_path / "sim.yaml", "simulation:\n  jitter_us: 450\n"))
+    phi, _ = truth_phi(rec)
+    cfg = write_config(tmp_path / "c.yaml", "estimation:\n  methods: [RTLS, RLS, REFINED]\n")
+    result, err = offline(cfg, rec, "--verbose")
+    for est in result:
+        print(est["method"], est["mass"] / phi[0] - 1, est["identified"])
+        assert_close_to_truth(est, phi)
+        if "mass" in est["identified"]:
+            assert abs(est["mass"] - phi[0]) <= 3 * est["phi_std"][0], est["method"]
 
 
 def test_joint_delay_standard_error_matches_its_error_over_seeds(trajectory, tmp_path):

@@ -112,6 +112,8 @@ typedef struct {
     int64_t joint_msgs_bad;    /* wrong joint count, NaN/Inf, time order */
     int64_t stamp_restarts;    /* joint stamps off the stream's rate: the
                                   stamp clock started again from them */
+    int stamp_acquiring;       /* 1: the clock has not locked on the
+                                  stream since its start or last restart */
     int64_t samples_ok;        /* loadid_signals_at served them */
     int64_t samples_stale;     /* refused: joint data too old or too new */
     int64_t samples_no_joints; /* refused: no joint state yet */

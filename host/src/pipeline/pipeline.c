@@ -816,17 +816,20 @@ static void check_joint_noise(loadid_pipeline_t *p) {
 }
 
 /* The joint stamps' clock (src/stamp_clock.hpp) started again this many
- * times in the window: each time stamps had left the stream's rate for
- * kRestartAfter in a row (a stream stamped on arrival, delayed or bunched
- * in transport), and the joint states around them were taken at wrong
- * times, which no phi_std counts. On the RX60 with exponential transport
- * delays on the joint stamps (1 kHz): 100 us mean, none; 150 us, under 3
- * in the window (RTLS 39 % off, not claimed: its misfit; REFINED 0.6 %);
- * 300 us, 19, RTLS 82 % off (not claimed) and REFINED 2.9 % off in mass at
- * 3.7 phi_std, claimed until this check; 3 ms stalls every 50 ms, 14,
- * REFINED 2.4 % off at 4.4 phi_std; 2 ms every 100 ms, 8, REFINED 1.7 % at
- * 3.1. Symmetric jitter of 400 us: at most 2 in the recording. */
-#define JOINT_STAMP_RESTARTS 3
+ * times in the window (or before START and not locked again by then):
+ * each time stamps had left the stream's rate for kRestartAfter in a row
+ * (a stream stamped on arrival, delayed or bunched in transport; jitter of
+ * half a period), the line it starts again from is as jittered as they
+ * are, and the joint states around it were taken at wrong times, which no
+ * phi_std counts. On the RX60 at 1 kHz with exponential transport delays
+ * on the joint stamps: 100 us mean, none; 150 us, 2 in the window, RTLS 39
+ * % off (not claimed: its misfit), REFINED 0.6 %; 300 us, 20, REFINED 2.7 %
+ * off in mass at 3.6 phi_std, claimed until this check; 3 ms stalls every
+ * 50 ms, 15, REFINED 2.4 % at 4.4 phi_std. Uniform jitter of 400 us: none
+ * in 6 draws; 450 and 500 us: 1 in 3 of 6 (a draw of 450 had had RTLS 3.8
+ * % off, claimed, before the line counted its first stamps one apart);
+ * 600 us, 15 to 30. So one is enough. */
+#define JOINT_STAMP_RESTARTS 1
 
 static void check_joint_stamps(loadid_pipeline_t *p) {
     loadid_signals_stats_t s;
@@ -1406,7 +1409,10 @@ static void run_command(loadid_pipeline_t *p, int64_t utime, int action, const c
                 loadid_signals_stats_t s;
                 loadid_signals_stats(p->sig, &s);
                 p->stale_at_start = s.samples_stale + s.samples_no_joints;
-                p->restarts_at_start = s.stamp_restarts;
+                /* A restart before START whose line is still acquiring
+                 * gives the window's first stamps: one of the window's. */
+                p->restarts_at_start =
+                    s.stamp_restarts - (s.stamp_acquiring && s.stamp_restarts > 0);
                 loadid_jr3_stats_t j;
                 loadid_jr3_decoder_stats(p->jr3, &j);
                 p->incomplete_at_start = j.samples_incomplete;
