@@ -161,6 +161,9 @@ NOISE_CELLS = {
     # not in the default set: paper noise, encoders of 2^14 counts a turn
     # (kalman.meas_sigma auto starts the joint filters at 2^20's noise)
     "paper_enc14": dict(sim=PAPER, vib=None, est=None, encoder_counts=16384),
+    # not in the default set: paper noise, joint and CAN stamps jittered by
+    # up to 400 us (uniform; the physics on time)
+    "paper_jitter400": dict(sim=PAPER, vib=None, est=None, jitter_us=400),
 }
 DEFAULT_NOISE = ["low", "paper", "high", "wrong3x", "vibration"]
 DEFAULT_METHODS = ["RTLS", "RIV", "RLS", "TLS_BATCH", "REFINED"]
@@ -791,8 +794,9 @@ def sim_config(robot, load, noise_cell) -> str:
         text += f"  vibration_linear: {c['vib'][0]!r}\n  vibration_angular: {c['vib'][1]!r}\n"
     if c.get("backlash") is not None:
         text += f"  backlash: {c['backlash']!r}\n"
-    if c.get("encoder_counts") is not None:
-        text += f"  encoder_counts: {c['encoder_counts']!r}\n"
+    for key in ("encoder_counts", "jitter_us"):
+        if c.get(key) is not None:
+            text += f"  {key}: {c[key]!r}\n"
     text += "  noise:\n" + "".join(f"    {k}: {v!r}\n" for k, v in c["sim"].items())
     return text
 
@@ -810,7 +814,7 @@ def sim_key(noise_cell):
     """Cells that simulate the same recording share it (paper, wrong3x)."""
     c = NOISE_CELLS[noise_cell]
     return (tuple(sorted(c["sim"].items())), c["vib"], c.get("backlash"),
-            c.get("encoder_counts"))
+            c.get("encoder_counts"), c.get("jitter_us"))
 
 
 def est_config(robot, noise_cell, methods, signals=None, lag=None, jerk_psd=None,
@@ -1573,7 +1577,8 @@ def main(argv=None) -> int:
           "correlation 0.8, as a sensor's low-pass filter makes it; not in the default set), "
           "clean (no noise, no vibration; not in the default set), low_rigid and paper_rigid "
           "(low and paper noise, gears without backlash; not in the default set), paper_enc14 "
-          "(paper noise, encoders of 2^14 counts a turn; not in the default set).")
+          "(paper noise, encoders of 2^14 counts a turn; not in the default set), paper_jitter400 "
+          "(paper noise, joint and CAN stamps jittered by up to 400 us; not in the default set).")
     ap.add_argument("--build", default=None, help="build tree with the programs (default build/release)")
     ap.add_argument("--robots", default=None, help=f"comma list of {', '.join(ROBOTS)} (default all)")
     ap.add_argument("--loads", default=None,
