@@ -205,8 +205,6 @@ int feed(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *p
         return rc;
     }
     s->clock.commit();
-    s->stats.stamp_restarts = s->clock.restarts();
-    s->stats.stamp_acquiring = s->clock.acquiring();
     s->position_noise.add(t_us, position, s->n, s->period_us);
     ++s->stats.joint_msgs_ok;
     s->piece_ended = false;
@@ -392,6 +390,8 @@ extern "C" int loadid_signals_kinematics_at(const loadid_signals_t *s, int64_t t
 extern "C" int loadid_signals_stats(const loadid_signals_t *s, loadid_signals_stats_t *stats) {
     if (!s || !stats) return -EINVAL;
     *stats = s->stats;
+    stats->stamp_restarts = s->clock.restarts();
+    stats->stamp_acquiring = s->clock.acquiring();
     return 0;
 }
 

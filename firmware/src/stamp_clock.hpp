@@ -11,10 +11,10 @@
 // motion. So it first acquires: a least-squares line through the stamps
 // since (re)start, t = a + b i (i counts periods, a lost message one
 // more), whose gains (about 4 / n for the phase) fall to the loop's g at
-// n = 4 / g stamps, where the loop takes over from the line. A stamp
-// under half a period after the line's last (a bunched message) restarts
-// the acquisition there; a first interval of kOtherRate periods or more is
-// another rate. The periods a stamp is counted
+// n = 4 / g stamps, where the loop takes over from the line. A second
+// stamp under half a period after the first (a bunched message) starts
+// the acquisition again there; a first interval of kOtherRate periods or
+// more is another rate. The periods a stamp is counted
 // as are those from the line's own time for the last stamp (at first the
 // period the clock started from, from kStampSlopeFrom stamps on the line's
 // slope): counted from the raw interval, a jitter over a quarter period
@@ -22,12 +22,13 @@
 // the acquisition, the loop never locked, and with 300-500 us of jitter at
 // 1 kHz the on-line estimates lost 20-65 % of the mass.
 //
-// A stamp more than half a period off the next period that is no clean
-// lost message (whole periods on, within a quarter period) is an outlier
-// (next()): a message delayed in transport, stamped on arrival. It is
-// taken as the next period, at the line's or loop's time, which it leaves
-// alone; only kRestartAfter of them in a row (a stream that moved) start
-// the clock again. Restarted from each such stamp, as before, the line
+// A later stamp more than half a period off the next period that is no
+// clean lost message (whole periods on, within a quarter period) is an
+// outlier (next()): a message delayed or bunched in transport, stamped on
+// arrival. It is taken as the next period, at the line's or loop's time,
+// which it leaves alone (but onto a line of under kStampSlopeFrom stamps,
+// whose time is as jittered as they are); only kRestartAfter of them in a
+// row (a stream that moved) start the clock again (restarts()). Restarted from each such stamp, as before, the line
 // began at a delayed one: 80 us of exponential transport delay at 1 kHz
 // restarted it once in the window and cost the on-line estimates 3 % of
 // the mass, 100 us 17 %.
@@ -88,8 +89,8 @@ class StampClock {
     // The newest stamp taken (INT64_MIN: none) and the period now.
     int64_t last_raw() const { return s_.last_raw; }
     double period() const { return s_.period; }
-    // Stamps that fitted neither the line nor the loop (neither the next
-    // period nor whole periods on): the clock started again from them.
+    // Times the clock started again since reset(): kRestartAfter outliers
+    // in a row, or a bunched second stamp.
     int64_t restarts() const { return s_.restarts; }
     // Taking the stamps from their line: not locked yet (since start or
     // the last restart).

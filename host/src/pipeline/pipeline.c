@@ -829,14 +829,13 @@ static void check_joint_noise(loadid_pipeline_t *p) {
  * in 6 draws; 450 and 500 us: 1 in 3 of 6 (a draw of 450 had had RTLS 3.8
  * % off, claimed, before the line counted its first stamps one apart);
  * 600 us, 15 to 30. So one is enough. */
-#define JOINT_STAMP_RESTARTS 1
 
 static void check_joint_stamps(loadid_pipeline_t *p) {
     loadid_signals_stats_t s;
     loadid_signals_stats(p->sig, &s);
     const int64_t r = s.stamp_restarts - p->restarts_at_start;
     p->stamp_restarts = 0;
-    if (r < JOINT_STAMP_RESTARTS) return;
+    if (r <= 0) return;
     p->stamp_restarts = r;
     note(p,
          "warning: joints: their stamps lost the stream's rate %lld times in the window (the "
