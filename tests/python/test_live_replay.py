@@ -66,14 +66,20 @@ def session(config, recording, tmp_path_factory):
     return counted(tmp_path_factory.mktemp("replay_alloc"), run)
 
 
-@pytest.fixture(scope="module")
-def offline(config, recording):
+def run_offline(config, recording):
+    """loadidd --offline --verbose: its results by method, the samples it
+    counted and its log."""
     r = subprocess.run([program("LOADIDD_EXE"), "--config", str(config), "--offline",
                         str(recording), "--verbose"], capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     ok = re.search(r"^loadidd: samples ok (\d+),", r.stderr, re.M)
     return {"result": {o["method"]: o for o in json.loads(r.stdout)},
-            "samples_ok": int(ok.group(1))}
+            "samples_ok": int(ok.group(1)), "stderr": r.stderr}
+
+
+@pytest.fixture(scope="module")
+def offline(config, recording):
+    return run_offline(config, recording)
 
 
 def test_replay_runs_and_stops_cleanly(session):
@@ -273,13 +279,11 @@ def test_coarse_encoders_retuned_live_as_offline(config, trajectory, tmp_path):
     allocates nothing meanwhile (release build)."""
     rec = simulate(tmp_path / "rec", trajectory, "--seed", "3", "--config",
                    write_config(tmp_path / "sim.yaml", "simulation:\n  encoder_counts: 16384\n"))
-    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(config), "--offline", str(rec),
-                        "--verbose"], capture_output=True, text=True, timeout=60)
-    assert r.returncode == 0, r.stderr
+    off = run_offline(config, rec)
     retuned = re.search(r"joints: their positions are [0-9.]+ times noisier .* the fixed-lag "
-                        r"smoother (\d+) steps \(was 50\)", r.stderr)
-    assert retuned and int(retuned.group(1)) > 100, r.stderr
-    offline = {o["method"]: o for o in json.loads(r.stdout)}
+                        r"smoother (\d+) steps \(was 50\)", off["stderr"])
+    assert retuned and int(retuned.group(1)) > 100, off["stderr"]
+    offline = off["result"]
 
     def run():
         return run_in_netns("replay_session.py", program("LOADIDD_EXE"), config, rec,

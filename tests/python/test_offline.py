@@ -1007,22 +1007,7 @@ def test_joint_stamps_late_by_5_ms_are_fitted_by_refined(recording, tmp_path, lc
     finds the load within the bounds, and the warning's kalman.joint_delay_s
     brings the on-line methods within them too. On the recording as it is
     the fitted delay stays under 1 ms and is not used."""
-    import struct
-    rec = tmp_path / "late-joints"
-    rec.mkdir()
-    for name in ("can.log", "truth.yaml"):
-        shutil.copy(recording / name, rec / name)
-    b = (recording / "lcm.log").read_bytes()
-    with open(rec / "lcm.log", "wb") as f:
-        for off, t, ch, d, n in lcm_events(recording / "lcm.log"):
-            data = b[d:d + n]
-            if ch == "LOADID_JOINTS":
-                m = lcmtypes.joint_state_t.decode(data)
-                m.utime += 5000
-                data = m.encode()
-            number = struct.unpack(">q", b[off + 4:off + 12])[0]
-            f.write(struct.pack(">IqqII", 0xEDA1DA01, number, t, len(ch), len(data)) + ch.encode()
-                    + data)
+    rec = restamp_joints(recording, tmp_path / "late-joints", lcmtypes, lambda u: u + 5000)
     phi, _ = truth_phi(recording)
     cfg = write_config(tmp_path / "c.yaml", "estimation:\n  methods: [RLS, REFINED]\n")
     (rls, refined), err = offline(cfg, rec, "--verbose")
@@ -1051,28 +1036,38 @@ def test_joint_stamps_late_by_5_ms_are_fitted_by_refined(recording, tmp_path, lc
     assert clean["refined"]["joint_delay_used"] is False
 
 
-def stamped_on_arrival(recording, dest, lcmtypes, mean_us, seed=1):
-    """The recording with every joint state's utime moved later by an
-    exponential transport delay of mean mean_us (kept increasing): a
-    stream stamped on arrival, not at sampling."""
+def restamp_joints(recording, dest, lcmtypes, utime_of):
+    """The recording with every joint state's utime u made utime_of(u), in
+    order; everything else as it is."""
     import struct
-    rng = np.random.default_rng(seed)
     dest.mkdir()
     for name in ("can.log", "truth.yaml"):
         shutil.copy(recording / name, dest / name)
     b = (recording / "lcm.log").read_bytes()
-    last = -1
     with open(dest / "lcm.log", "wb") as f:
         for off, t, ch, d, n in lcm_events(recording / "lcm.log"):
             data = b[d:d + n]
             if ch == "LOADID_JOINTS":
                 m = lcmtypes.joint_state_t.decode(data)
-                m.utime = last = max(m.utime + int(rng.exponential(mean_us)), last + 1)
+                m.utime = utime_of(m.utime)
                 data = m.encode()
             number = struct.unpack(">q", b[off + 4:off + 12])[0]
             f.write(struct.pack(">IqqII", 0xEDA1DA01, number, t, len(ch), len(data)) + ch.encode()
                     + data)
     return dest
+
+
+def stamped_on_arrival(recording, dest, lcmtypes, mean_us, seed=1):
+    """The recording with every joint state's utime moved later by an
+    exponential transport delay of mean mean_us (kept increasing): a
+    stream stamped on arrival, not at sampling."""
+    rng = np.random.default_rng(seed)
+    last = [-1]
+
+    def arrival(u):
+        last[0] = max(u + int(rng.exponential(mean_us)), last[0] + 1)
+        return last[0]
+    return restamp_joints(recording, dest, lcmtypes, arrival)
 
 
 def test_joint_stamps_delayed_in_transport(recording, tmp_path, lcmtypes):

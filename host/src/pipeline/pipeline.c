@@ -834,9 +834,8 @@ static void check_joint_stamps(loadid_pipeline_t *p) {
     loadid_signals_stats_t s;
     loadid_signals_stats(p->sig, &s);
     const int64_t r = s.stamp_restarts - p->restarts_at_start;
-    p->stamp_restarts = 0;
-    if (r <= 0) return;
-    p->stamp_restarts = r;
+    p->stamp_restarts = r > 0 ? r : 0;
+    if (!p->stamp_restarts) return;
     note(p,
          "warning: joints: their stamps lost the stream's rate %lld times in the window (the "
          "stamp clock started again from them; %lld joint states refused in all): stamped on "
@@ -1073,13 +1072,11 @@ static void end_stalled_piece(loadid_pipeline_t *p, int64_t now_us) {
 }
 
 void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us) {
-    /* kalman.lag_s, or the smoother's as it runs when retune_joint_filters
-     * lengthened it */
-    int64_t lag = llround(p->cfg.kalman_lag_s * 1e6);
+    /* the fixed-lag smoother's lag as it runs (kalman.lag_s in joint
+     * periods; retune_joint_filters may lengthen it) */
     loadid_jf_config_t c;
-    if (loadid_signals_filter_config(p->sig, &c) == 0 && c.lag_steps * c.nominal_step_us > lag)
-        lag = c.lag_steps * c.nominal_step_us;
-    const int64_t grace = TICK_GRACE_US + lag;
+    loadid_signals_filter_config(p->sig, &c);
+    const int64_t grace = TICK_GRACE_US + (int64_t)c.lag_steps * c.nominal_step_us;
     end_stalled_piece(p, now_us);
     flush_pending(p, now_us - grace, 0); /* joints stopped: serve (or refuse) them */
     advance(p, now_us - grace);
