@@ -36,6 +36,19 @@ struct loadid_signals {
     Held held[LOADID_SIGNALS_MAX_PROBE + 1];
     int held_count;
     int64_t period_us;
+    // The look-ahead (StampClock::far): a stamp far past the last time and
+    // those after it, held until count_ahead counts the first; oldest first.
+    Held ahead[StampClock::kLookAhead];
+    int ahead_count;
+    // The joint states the last push or end_piece put into the filters
+    // (loadid_signals_fed_state): at most all held ones and the new one.
+    struct Fed {
+        int64_t t;
+        loadid_real_t q[LOADID_MAX_JOINTS];
+    };
+    static constexpr int kMaxFed = std::max(LOADID_SIGNALS_MAX_PROBE, StampClock::kLookAhead) + 1;
+    Fed fed[kMaxFed];
+    int fed_count;
 };
 
 namespace {
@@ -165,7 +178,7 @@ extern "C" int loadid_signals_reset(loadid_signals_t *s) {
     s->stats = loadid_signals_stats_t{};
     s->clock.reset();
     s->position_noise.reset();
-    s->held_count = 0;
+    s->held_count = s->ahead_count = s->fed_count = 0;
     return 0;
 }
 
@@ -185,15 +198,16 @@ int check_joints(const loadid_signals *s, int64_t t_us, int num_joints,
     return 0;
 }
 
-// One joint state into the filters (its stamp regularised); counted.
+// One joint state into the filters (its stamp regularised; counted: its
+// periods as StampClock::count_ahead found them, 0 none); counted.
 int feed(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *position,
-         const loadid_real_t *setpoint) {
+         const loadid_real_t *setpoint, int counted) {
     // Everything is checked before either filter changes, so a refused
     // message leaves both exactly as they were.
     int rc = check_joints(s, t_us, num_joints, position, setpoint);
     // The regularised stamp; a loop that has not locked yet may not go
     // backwards in time.
-    if (rc == 0) t_us = s->clock.propose(t_us, double(s->period_us), s->cfg.stamp_gain);
+    if (rc == 0) t_us = s->clock.propose(t_us, double(s->period_us), s->cfg.stamp_gain, counted);
     if (rc == 0 && (t_us <= loadid_jf_last_time(s->measured) ||
                     (setpoint && t_us <= loadid_jf_last_time(s->setpoint))))
         rc = LOADID_E_TIME_ORDER;
@@ -208,7 +222,54 @@ int feed(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *p
     s->position_noise.add(t_us, position, s->n, s->period_us);
     ++s->stats.joint_msgs_ok;
     s->piece_ended = false;
+    if (s->fed_count < loadid_signals::kMaxFed) {
+        auto &f = s->fed[s->fed_count++];
+        f.t = t_us;
+        std::memcpy(f.q, position, size_t(s->n) * sizeof *position);
+    }
     return 0;
+}
+
+// The held states into the filters, oldest first, as far as the stamps
+// after each count it (done: no more are coming). The last one's code.
+int release(loadid_signals *s, bool done) {
+    int rc = 0;
+    while (s->ahead_count > 0) {
+        const auto &h = s->ahead[0];
+        int counted = 0;
+        if (s->clock.far(h.t, s->cfg.stamp_gain)) {
+            int64_t r[StampClock::kLookAhead];
+            for (int j = 0; j < s->ahead_count; ++j) r[j] = s->ahead[j].t;
+            counted = s->clock.count_ahead(r, s->ahead_count,
+                                           s->ahead_count == StampClock::kLookAhead, done);
+            if (counted == 0) break;
+        }
+        rc = feed(s, h.t, s->n, h.q, h.has_setpoint ? h.setpoint : nullptr, counted);
+        std::memmove(s->ahead, s->ahead + 1, size_t(--s->ahead_count) * sizeof s->ahead[0]);
+    }
+    return rc;
+}
+
+// A joint state once the period is known: into the filters, or held while
+// a far stamp before it (or it) waits for the stamps after it.
+int take(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *position,
+         const loadid_real_t *setpoint) {
+    if (s->ahead_count == 0 && !s->clock.far(t_us, s->cfg.stamp_gain))
+        return feed(s, t_us, num_joints, position, setpoint, 0);
+    int rc = check_joints(s, t_us, num_joints, position, setpoint);
+    if (rc == 0 && s->ahead_count > 0 && t_us <= s->ahead[s->ahead_count - 1].t)
+        rc = LOADID_E_TIME_ORDER;
+    if (rc != 0) {
+        ++s->stats.joint_msgs_bad;
+        s->position_noise.gap();
+        return rc;
+    }
+    auto &h = s->ahead[s->ahead_count++];
+    h.t = t_us;
+    h.has_setpoint = setpoint != nullptr;
+    std::memcpy(h.q, position, size_t(s->n) * sizeof *position);
+    if (setpoint) std::memcpy(h.setpoint, setpoint, size_t(s->n) * sizeof *setpoint);
+    return release(s, false);
 }
 
 // The filter banks for a joint stream of period p [us] (signals.h,
@@ -267,7 +328,7 @@ int probe(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *
     configure_for(s, std::clamp<int64_t>(probed_period(s->held, k), 50, 1000000));
     for (int i = 0; i < s->held_count; ++i) {
         const auto &e = s->held[i];
-        rc = feed(s, e.t, s->n, e.q, e.has_setpoint ? e.setpoint : nullptr);
+        rc = take(s, e.t, s->n, e.q, e.has_setpoint ? e.setpoint : nullptr);
     }
     s->held_count = 0;
     return rc; // the last one's
@@ -279,8 +340,20 @@ extern "C" int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int
                                           const loadid_real_t *position,
                                           const loadid_real_t *setpoint) {
     if (!s) return -EINVAL;
+    s->fed_count = 0;
     if (s->period_us == 0) return probe(s, t_us, num_joints, position, setpoint);
-    return feed(s, t_us, num_joints, position, setpoint);
+    return take(s, t_us, num_joints, position, setpoint);
+}
+
+extern "C" int loadid_signals_fed_count(const loadid_signals_t *s) {
+    return s ? s->fed_count : 0;
+}
+
+extern "C" int64_t loadid_signals_fed_state(const loadid_signals_t *s, int i,
+                                            loadid_real_t *position) {
+    if (!s || i < 0 || i >= s->fed_count) return INT64_MIN;
+    if (position) std::memcpy(position, s->fed[i].q, size_t(s->n) * sizeof *position);
+    return s->fed[i].t;
 }
 
 extern "C" int64_t loadid_signals_joint_period_us(const loadid_signals_t *s) {
@@ -407,6 +480,8 @@ extern "C" int64_t loadid_signals_newest_joint_time(const loadid_signals_t *s) {
 
 extern "C" int loadid_signals_end_piece(loadid_signals_t *s) {
     if (!s) return -EINVAL;
+    s->fed_count = 0;
+    release(s, true); /* no stamps after them are coming */
     if (s->piece_ended) return 0;
     loadid_jf_end_piece(s->measured);
     loadid_jf_end_piece(s->setpoint);

@@ -134,6 +134,21 @@ static int signals_run(workload_t *w) {
             if (loadid_signals_retune(w->sig_lag, 1e-4, 20000) <= 0) ++bad;
         }
     }
+    /* The stamp clock's look-ahead: two lost states (held until four
+     * stamps after them confirm it), then a far stamp the stream's stall
+     * releases. */
+    int64_t t = w->t_us[NSAMPLES - 1] + 3000;
+    loadid_real_t q[NJ];
+    for (int k = 0; k < 4; ++k, t += 1000) {
+        if (loadid_signals_push_joints(w->sig_lag, t, NJ, w->q[NSAMPLES - 1], NULL) != 0) ++bad;
+        if (loadid_signals_fed_count(w->sig_lag) != (k < 3 ? 0 : 4)) ++bad;
+    }
+    if (llabs(loadid_signals_fed_state(w->sig_lag, 3, q) - (t - 1000)) > 2) ++bad;
+    if (loadid_signals_push_joints(w->sig_lag, t + 5000, NJ, w->q[NSAMPLES - 1], NULL) != 0 ||
+        loadid_signals_fed_count(w->sig_lag) != 0)
+        ++bad;
+    if (loadid_signals_end_piece(w->sig_lag) != 0 || loadid_signals_fed_count(w->sig_lag) != 1)
+        ++bad;
     loadid_jf_config_t jcfg;
     loadid_jf_config_default(&jcfg);
     if (loadid_jf_smooth(&jcfg, NSAMPLES, w->t_us, w->q1, w->smooth_work, w->smoothed[0],

@@ -454,17 +454,33 @@ static void joint_period_is_measured_from_the_stream(void **state) {
     loadid_signals_destroy(s);
 }
 
-/* The k-th joint state of a 1 kHz stream from 1 s (its motion's time t):
- * the worst so far of its regularised stamp's error against t + offset,
- * and from k 200 on of alpha 60 ms back (behind the smoother's lag)
- * against the motion's. */
-static void check_regularised(loadid_signals_t *s, int k, int64_t t, double offset, double *worst,
-                              double *worst_alpha) {
-    const int64_t reg = loadid_signals_newest_joint_time(s) - 1000000;
-    *worst = fmax(*worst, fabs((double)(reg - t) - offset));
+/* The joint states of a 1 kHz stream from 1 s pushed and not yet in the
+ * filters (held by the period probe or the stamp clock's look-ahead):
+ * their motion's times, oldest first. */
+typedef struct {
+    int64_t t[64];
+    int head, count;
+} pending_t;
+
+/* A joint state of the motion's time t pushed (accepted): each state the
+ * push put into the filters from t_from on, the worst so far of its
+ * regularised stamp's error against its sample's time + offset; and from
+ * t_alpha on, alpha 60 ms back (behind the smoother's lag) against the
+ * motion's. */
+static void check_regularised(loadid_signals_t *s, pending_t *pend, int64_t t, int64_t t_from,
+                              int64_t t_alpha, double offset, double *worst, double *worst_alpha) {
+    pend->t[(pend->head + pend->count++) % 64] = t;
+    assert_true(pend->count <= 64);
+    for (int i = 0; i < loadid_signals_fed_count(s); ++i) {
+        const int64_t t_fed = pend->t[pend->head];
+        pend->head = (pend->head + 1) % 64;
+        --pend->count;
+        const int64_t reg = loadid_signals_fed_state(s, i, NULL) - 1000000;
+        if (t_fed >= t_from) *worst = fmax(*worst, fabs((double)(reg - t_fed) - offset));
+    }
     loadid_regressor_input_t m;
     const int64_t ts = 1000000 + t - 60000;
-    if (k >= 200 && loadid_signals_at(s, ts, NULL, NULL, NULL, &m, NULL) == 0) {
+    if (t >= t_alpha && loadid_signals_at(s, ts, NULL, NULL, NULL, &m, NULL) == 0) {
         loadid_kin_state_t want = truth_at(&kMeasured, seconds(t - 60000));
         for (int i = 0; i < 3; ++i)
             *worst_alpha = fmax(*worst_alpha, fabs(m.alpha[i] - want.alpha[i]));
@@ -487,8 +503,10 @@ static void check_regularised(loadid_signals_t *s, int k, int64_t t, double offs
  * 2.75 rad/s: what the loop
  * leaves of the jitter, a few us, moves a joint by 1e-5 rad, ten encoder
  * steps; 3e-11 without jitter), the clock never restarted and locked. At
- * 450 us, nearly half a period, it restarts (2 seen, early) but locks, and
- * the stamps are within 250 us (96 seen), alpha within 1 (0.62). */
+ * 450 us, nearly half a period, it restarts (2 seen, in the first 30 ms)
+ * but locks, and the stamps are within 150 us (70 seen; 96 before the
+ * look-ahead, whose first count, by the held stamps' median, settled on a
+ * line 2 % short: 1.2 ms), alpha within 1 (0.53). */
 static void jittered_stamps_are_regularised(void **state) {
     (void)state;
     const int64_t jitters[] = {200, 400, 450};
@@ -497,6 +515,7 @@ static void jittered_stamps_are_regularised(void **state) {
         loadid_signals_t *s = make_probing(8, 50000);
         uint32_t lcg = 12345u;
         double worst = 0, worst_alpha = 0;
+        pending_t pend = {0};
         for (int k = 0; k < 1500; ++k) {
             const int64_t t = (int64_t)k * 1000;
             lcg = lcg * 1664525u + 1013904223u;
@@ -509,7 +528,7 @@ static void jittered_stamps_are_regularised(void **state) {
                               (long long)loadid_signals_joint_period_us(s));
                 assert_true(llabs(loadid_signals_joint_period_us(s) - 1000) <= 30 * jit / 200);
             }
-            if (k >= 100) check_regularised(s, k, t, 0, &worst, &worst_alpha);
+            check_regularised(s, &pend, t, 100000, 200000, 0, &worst, &worst_alpha);
         }
         loadid_signals_stats_t st;
         loadid_signals_stats(s, &st);
@@ -520,7 +539,7 @@ static void jittered_stamps_are_regularised(void **state) {
             (long long)st.stamp_restarts);
         if (jit <= 400) assert_int_equal(st.stamp_restarts, 0);
         assert_int_equal(st.stamp_acquiring, 0); /* locked */
-        assert_true(worst <= (jit <= 400 ? 100 : 250));
+        assert_true(worst <= (jit <= 400 ? 100 : 150));
         assert_true(fabs(loadid_signals_stream_period_us(s) - 1000) < 1);
         assert_true(worst_alpha > 0 && worst_alpha < 1.0);
         loadid_signals_destroy(s);
@@ -528,37 +547,48 @@ static void jittered_stamps_are_regularised(void **state) {
 }
 
 /* Stamped on arrival after a transport delay (exponential, one-sided:
- * never early), 1 kHz: a delay over half a period is an outlier taken as
- * the next period, not a restart of the clock. At a mean of 80 us (some 1
- * in 800 stamps over 0.6 ms late) the clock never restarts and refuses
- * nothing, every regularised stamp after the first 100 is within 150 us of
- * its sample's time plus the mean delay (seen 21 us), and alpha within 1
- * rad/s^2 of the motion's (seen 0.16); restarting from each such stamp, it
- * had restarted and the on-line estimates lost 3 % of the mass. A stream
- * that stalls 5 ms every 50 ms and then delivers the held states at once
- * (bunched) still restarts it (counted: 20 seen, 124 states refused as
- * out of order), as it must, since no stamp says which of them were held. */
+ * never early), 1 kHz. A delay over half a period is taken as the next
+ * period; one over 1.5 periods (or a burst: a stall, then the held states
+ * at once) waits for the stamps after it, which tell it from lost
+ * messages. At means of 80, 150 and 300 us, and at 80 us with a stall of
+ * 5 ms every 50 ms, the clock restarts at most once, in the first 100
+ * states (at 300 us it started on a delayed stamp), and refuses nothing;
+ * every regularised stamp after the first 100 is within 150 us (200 us at
+ * 300) of its sample's time plus the mean delay (seen 21, 28, 119 and 20
+ * us), and alpha within 1 rad/s^2 of the motion's (seen 0.16-0.34).
+ * Counted from each stamp alone, one delayed 0.75-1.25 periods passed for
+ * a lost message and restarted the clock (on the test recording 2 times in
+ * the window at 150 us, 20 at 300 us), and a stall did every time. */
 static void delayed_stamps_are_regularised(void **state) {
     (void)state;
-    for (int bursts = 0; bursts <= 1; ++bursts) {
+    const struct {
+        double mean;
+        int bursts;
+        double bound;
+    } cases[] = {{80, 0, 150}, {150, 0, 150}, {300, 0, 200}, {80, 1, 150}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
+        const double mean = cases[c].mean;
+        const int bursts = cases[c].bursts;
         loadid_signals_t *s = make_probing(8, 50000);
         loadid_rng_t rng;
         loadid_rng_seed(&rng, 11);
-        const double mean = 80;
         double worst = 0, worst_alpha = 0;
+        pending_t pend = {0};
+        loadid_signals_stats_t early;
         int64_t last = INT64_MIN;
         for (int k = 0; k < 1500; ++k) {
             const int64_t t = (int64_t)k * 1000;
             int64_t stamp =
                 1000000 + t + (int64_t)llround(-mean * log(1 - loadid_rng_uniform(&rng)));
-            if (bursts && k % 50 < 5) stamp = 1000000 + (k - k % 50 + 5) * 1000LL; /* held */
+            if (bursts && k % 50 >= 20 && k % 50 < 25) /* held until the 25th */
+                stamp = 1000000 + (k - k % 50 + 25) * 1000LL;
             if (stamp <= last) stamp = last + 1;
             last = stamp;
             loadid_real_t q[3 * NJ];
             quad_at(&kMeasured, seconds(t), q);
-            const int rc = loadid_signals_push_joints(s, stamp, NJ, q, NULL);
-            assert_true(rc == 0 || (bursts && rc == LOADID_E_TIME_ORDER)); /* after a restart */
-            if (k >= 100 && !bursts) check_regularised(s, k, t, mean, &worst, &worst_alpha);
+            assert_int_equal(loadid_signals_push_joints(s, stamp, NJ, q, NULL), 0);
+            check_regularised(s, &pend, t, 100000, 200000, mean, &worst, &worst_alpha);
+            if (k == 100) loadid_signals_stats(s, &early);
         }
         loadid_signals_stats_t st;
         loadid_signals_stats(s, &st);
@@ -567,14 +597,11 @@ static void delayed_stamps_are_regularised(void **state) {
             "rad/s^2, restarts %lld, refused %lld\n",
             mean, bursts ? " and 5 ms stalls" : "", worst, worst_alpha,
             (long long)st.stamp_restarts, (long long)st.joint_msgs_bad);
-        if (bursts) {
-            assert_true(st.stamp_restarts >= 10);
-        } else {
-            assert_int_equal(st.stamp_restarts, 0);
-            assert_int_equal(st.joint_msgs_bad, 0);
-            assert_true(worst <= 150);
-            assert_true(worst_alpha > 0 && worst_alpha < 1.0);
-        }
+        assert_true(st.stamp_restarts <= 1);
+        assert_int_equal(st.stamp_restarts, early.stamp_restarts); /* none after the start */
+        assert_int_equal(st.joint_msgs_bad, 0);
+        assert_true(worst <= cases[c].bound);
+        assert_true(worst_alpha > 0 && worst_alpha < 1.0);
         loadid_signals_destroy(s);
     }
 }

@@ -73,11 +73,15 @@ typedef struct {
      * the period, which the loop tracks (gain stamp_gain^2 / 4). Encoders
      * read to 2^-20 of a turn at 2 rad/s move 1e-4 rad in 50 us of
      * jitter: treated as exact, that made the filters' q'' useless (RLS
-     * found 2 % of the mass with 200 us of jitter). A stamp a whole number
-     * k >= 2 of periods on (within a quarter period) follows k - 1 lost
-     * messages and keeps the period; any other stamp more than half a
-     * period off the prediction resynchronises the loop (a bunched
-     * message, a stream at another rate). Such a loop pulls in only a
+     * found 2 % of the mass with 200 us of jitter). A stamp over 1.5
+     * periods past the prediction is held with those after it (up to 16)
+     * until they tell lost messages (every later stamp a period on) from
+     * a delay or a burst (one-sided: the earliest of them on time); it is
+     * then counted so, and lost messages keep the period. Any other stamp
+     * over half a period off the prediction (delayed, bunched) is taken
+     * as the next period; three of them in a row, or counted stamps off
+     * their periods 32 times in a row, restart the clock (a stream that
+     * moved; stamp_restarts). Such a loop pulls in only a
      * period error small against stamp_gain, so it first acquires: the
      * stamps since (re)start are taken from their least-squares line
      * against their period counts, from the filters' period, until 4 /
@@ -170,11 +174,22 @@ int loadid_signals_reset(loadid_signals_t *s);
 int loadid_signals_num_joints(const loadid_signals_t *s);
 
 /* One joint state (joint_state_t): measured positions and, if not NULL,
- * setpoints, num_joints each. Returns 0, or (counted in joint_msgs_bad,
- * nothing changed) -EBADMSG for a joint count not the chain's,
- * LOADID_E_NONFINITE, LOADID_E_TIME_ORDER; -EINVAL for a NULL s. */
+ * setpoints, num_joints each. It reaches the filters now, or with the
+ * states held before it (the period probe; a stamp far past the
+ * prediction, stamp_gain), or is held (counted when it reaches them).
+ * Returns 0, or (counted in joint_msgs_bad, nothing changed) -EBADMSG for
+ * a joint count not the chain's, LOADID_E_NONFINITE, LOADID_E_TIME_ORDER;
+ * -EINVAL for a NULL s. Releasing held states, the last one's code. */
 int loadid_signals_push_joints(loadid_signals_t *s, int64_t t_us, int num_joints,
                                const loadid_real_t *position, const loadid_real_t *setpoint);
+
+/* The joint states the last loadid_signals_push_joints or
+ * loadid_signals_end_piece put into the filters, oldest first: their
+ * count (0 for NULL), and the i-th one's regularised time [us] (INT64_MIN
+ * for a bad i) with its positions copied to position (if not NULL;
+ * num_joints values). */
+int loadid_signals_fed_count(const loadid_signals_t *s);
+int64_t loadid_signals_fed_state(const loadid_signals_t *s, int i, loadid_real_t *position);
 
 /* The regressor's inputs for the sensor sample at t_us, from the
  * configured source, and RIV's instruments from the setpoints.
@@ -204,8 +219,9 @@ int loadid_signals_stats(const loadid_signals_t *s, loadid_signals_stats_t *stat
  * filter's lag_steps > 0): the newest time it can serve now. */
 int64_t loadid_signals_last_joint_time(const loadid_signals_t *s);
 
-/* The joint stream has stalled: with the fixed-lag smoother, serve what
- * was received with the joint states that came after it
+/* The joint stream has stalled: the held joint states go into the
+ * filters, counted by the stamps there are; with the fixed-lag smoother,
+ * serve what was received with the joint states that came after it
  * (loadid_jf_end_piece on both filters), once until the next joint state.
  * Returns 0 or -EINVAL. */
 int loadid_signals_end_piece(loadid_signals_t *s);

@@ -153,6 +153,7 @@ struct loadid_pipeline {
 
 static void flush_pending(loadid_pipeline_t *p, int64_t before, int ready);
 static int refined_busy(loadid_pipeline_t *p);
+static void refined_take_joints(loadid_pipeline_t *p);
 static void restart_rows(loadid_pipeline_t *p);
 static void apply_measured_noise(loadid_pipeline_t *p);
 static void reset_drift(loadid_pipeline_t *p);
@@ -1067,6 +1068,7 @@ static void end_stalled_piece(loadid_pipeline_t *p, int64_t now_us) {
     const int64_t newest = loadid_signals_newest_joint_time(p->sig);
     if (newest != INT64_MIN && newest < now_us - TICK_GRACE_US) {
         loadid_signals_end_piece(p->sig);
+        refined_take_joints(p);
         flush_pending(p, INT64_MIN, 1);
     }
 }
@@ -1084,6 +1086,7 @@ void loadid_pipeline_tick(loadid_pipeline_t *p, int64_t now_us) {
 
 void loadid_pipeline_finish(loadid_pipeline_t *p, int64_t now_us) {
     loadid_signals_end_piece(p->sig); /* nothing more comes: serve what there is */
+    refined_take_joints(p);
     flush_pending(p, INT64_MAX, 0);
     advance(p, now_us);
     if (p->state == LOADID_STATE_ZEROING) finish_zeroing(p, now_us);
@@ -1142,6 +1145,16 @@ static void note_joint_period(loadid_pipeline_t *p) {
 #define JOINT_RETUNE_S 0.4
 #define JOINT_RETUNE_MAX_LAG_S 0.2
 
+/* REFINED keeps the joint states on the filters' (regularised) clock, as
+ * they reach the filters (the signals hold some: the period probe, the
+ * stamp clock's look-ahead). */
+static void refined_take_joints(loadid_pipeline_t *p) {
+    loadid_real_t q[LOADID_MAX_JOINTS];
+    if (!p->refined || refined_busy(p)) return;
+    for (int i = 0; i < loadid_signals_fed_count(p->sig); ++i)
+        loadid_refined_joint(p->refined, loadid_signals_fed_state(p->sig, i, q), q);
+}
+
 static void retune_joint_filters(loadid_pipeline_t *p) {
     if (p->state != LOADID_STATE_ESTIMATING || (p->cfg.noise_given & LOADID_NOISE_GIVEN_KF_MEAS) ||
         p->cfg.signals == LOADID_SIGNALS_SETPOINT ||
@@ -1193,10 +1206,7 @@ void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_jo
         p->have_q = 1;
         const int64_t newest = loadid_signals_newest_joint_time(p->sig);
         if (!p->period_noted && newest != INT64_MIN) note_joint_period(p);
-        /* REFINED keeps the joint states on the filters' (regularised)
-         * clock: none while the joint period is being measured. */
-        if (p->refined && !refined_busy(p) && newest != INT64_MIN)
-            loadid_refined_joint(p->refined, newest, pos);
+        refined_take_joints(p);
         retune_joint_filters(p);
         flush_pending(p, INT64_MIN, 1);
     }
