@@ -250,26 +250,33 @@ int release(loadid_signals *s, bool done) {
     return rc;
 }
 
+// A joint state appended to a queue of held ones (the probe's, the
+// look-ahead's; room for it) once checked: 0, or the refusal, counted.
+int hold(loadid_signals *s, loadid_signals::Held *queue, int *count, int64_t t_us, int num_joints,
+         const loadid_real_t *position, const loadid_real_t *setpoint) {
+    int rc = check_joints(s, t_us, num_joints, position, setpoint);
+    if (rc == 0 && *count > 0 && t_us <= queue[*count - 1].t) rc = LOADID_E_TIME_ORDER;
+    if (rc != 0) {
+        ++s->stats.joint_msgs_bad;
+        s->position_noise.gap();
+        return rc;
+    }
+    auto &h = queue[(*count)++];
+    h.t = t_us;
+    h.has_setpoint = setpoint != nullptr;
+    std::memcpy(h.q, position, size_t(s->n) * sizeof *position);
+    if (setpoint) std::memcpy(h.setpoint, setpoint, size_t(s->n) * sizeof *setpoint);
+    return 0;
+}
+
 // A joint state once the period is known: into the filters, or held while
 // a far stamp before it (or it) waits for the stamps after it.
 int take(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *position,
          const loadid_real_t *setpoint) {
     if (s->ahead_count == 0 && !s->clock.far(t_us, s->cfg.stamp_gain))
         return feed(s, t_us, num_joints, position, setpoint, 0);
-    int rc = check_joints(s, t_us, num_joints, position, setpoint);
-    if (rc == 0 && s->ahead_count > 0 && t_us <= s->ahead[s->ahead_count - 1].t)
-        rc = LOADID_E_TIME_ORDER;
-    if (rc != 0) {
-        ++s->stats.joint_msgs_bad;
-        s->position_noise.gap();
-        return rc;
-    }
-    auto &h = s->ahead[s->ahead_count++];
-    h.t = t_us;
-    h.has_setpoint = setpoint != nullptr;
-    std::memcpy(h.q, position, size_t(s->n) * sizeof *position);
-    if (setpoint) std::memcpy(h.setpoint, setpoint, size_t(s->n) * sizeof *setpoint);
-    return release(s, false);
+    const int rc = hold(s, s->ahead, &s->ahead_count, t_us, num_joints, position, setpoint);
+    return rc != 0 ? rc : release(s, false);
 }
 
 // The filter banks for a joint stream of period p [us] (signals.h,
@@ -311,18 +318,8 @@ int64_t probed_period(const loadid_signals::Held *held, int k) {
 // they go into the filters.
 int probe(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *position,
           const loadid_real_t *setpoint) {
-    int rc = check_joints(s, t_us, num_joints, position, setpoint);
-    if (rc == 0 && s->held_count > 0 && t_us <= s->held[s->held_count - 1].t)
-        rc = LOADID_E_TIME_ORDER;
-    if (rc != 0) {
-        ++s->stats.joint_msgs_bad;
-        return rc;
-    }
-    auto &h = s->held[s->held_count++];
-    h.t = t_us;
-    h.has_setpoint = setpoint != nullptr;
-    std::memcpy(h.q, position, size_t(s->n) * sizeof *position);
-    if (setpoint) std::memcpy(h.setpoint, setpoint, size_t(s->n) * sizeof *setpoint);
+    int rc = hold(s, s->held, &s->held_count, t_us, num_joints, position, setpoint);
+    if (rc != 0) return rc;
     const int k = s->cfg.period_probe;
     if (s->held_count <= k) return 0;
     configure_for(s, std::clamp<int64_t>(probed_period(s->held, k), 50, 1000000));
