@@ -1117,7 +1117,7 @@ def test_joint_stamps_delayed_in_transport(recording, tmp_path, lcmtypes):
                           "--verbose")
     said = re.search(r"warning: joints: their stamps lost the stream's rate (\d+) times in the "
                      r"window .* no method claims anything", err)
-    assert said and int(said.group(1)) >= 5, err
+    assert said and int(said.group(1)) >= 1, err
     for est in result:
         assert est["identified"] == [], (est["method"], est["identified"])
         assert est["not_identified"]["mass"].startswith(
