@@ -154,9 +154,8 @@ class StampClock {
     // The time to use for t_raw; nominal: the period to start from [us]
     // (the filters'); counted: its periods after the last time as
     // count_ahead() found them (0: from the stamp alone; kNoFit: start
-    // again from it). The clock takes
-    // the stamp only at commit(), once the filters have. gain >= 1: the
-    // stamps as they are, nothing kept.
+    // again from it). The clock takes the stamp only at commit(), once the
+    // filters have. gain >= 1: the stamps as they are, nothing kept.
     int64_t propose(int64_t t_raw, double nominal, double gain, int counted = 0) {
         next_ = s_;
         if (gain >= 1) return t_raw;
