@@ -445,11 +445,29 @@ static void joint_period_is_measured_from_the_stream(void **state) {
     print_message("jittered probe: period %lld us\n", (long long)loadid_signals_joint_period_us(s));
     assert_true(llabs(loadid_signals_joint_period_us(s) - 1000) <= 30);
     loadid_signals_destroy(s);
+    /* A stream that starts with a burst: its first six states (1 ms apart)
+     * delivered at once, 1 us apart, then on time. The bunched intervals
+     * are no period (taken as one, the probe said 50 us); then the states
+     * after it are served as the motion's. */
+    loadid_regressor_input_t m;
+    s = make_probing(8, 50000);
+    for (int i = 0; i < 2000; ++i) {
+        loadid_real_t q[3 * NJ];
+        quad_at(&kMeasured, seconds((int64_t)i * 1000), q);
+        const int64_t stamp = i < 6 ? 5000 + i : (int64_t)i * 1000;
+        assert_int_equal(loadid_signals_push_joints(s, stamp, NJ, q, NULL), 0);
+    }
+    print_message("probe after a burst: period %lld us\n",
+                  (long long)loadid_signals_joint_period_us(s));
+    assert_true(loadid_signals_joint_period_us(s) == 1000);
+    assert_int_equal(loadid_signals_at(s, 1900300, NULL, NULL, NULL, &m, NULL), 0);
+    loadid_kin_state_t want = truth_at(&kMeasured, seconds(1900300));
+    assert_vec(m.alpha, want.alpha, 2e-3, "alpha after a bunched start");
+    loadid_signals_destroy(s);
     /* The filters as configured for 1 kHz on a 125 Hz stream: nothing served. */
     s = make_probing(0, 0);
     assert_true(loadid_signals_joint_period_us(s) == 1000);
     push_every(s, 8000, 0, 2000000);
-    loadid_regressor_input_t m;
     assert_int_not_equal(loadid_signals_at(s, 1500300, NULL, NULL, NULL, &m, NULL), 0);
     loadid_signals_destroy(s);
 }
