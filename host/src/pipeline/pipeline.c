@@ -818,18 +818,17 @@ static void check_joint_noise(loadid_pipeline_t *p) {
 
 /* The joint stamps' clock (src/stamp_clock.hpp) started again this many
  * times in the window (or before START and not locked again by then):
- * each time stamps had left the stream's rate for kRestartAfter in a row
- * (a stream stamped on arrival, delayed or bunched in transport; jitter of
- * half a period), the line it starts again from is as jittered as they
- * are, and the joint states around it were taken at wrong times, which no
- * phi_std counts. On the RX60 at 1 kHz with exponential transport delays
- * on the joint stamps: 100 us mean, none; 150 us, 2 in the window, RTLS 39
- * % off (not claimed: its misfit), REFINED 0.6 %; 300 us, 20, REFINED 2.7 %
- * off in mass at 3.6 phi_std, claimed until this check; 3 ms stalls every
- * 50 ms, 15, REFINED 2.4 % at 4.4 phi_std. Uniform jitter of 400 us: none
- * in 6 draws; 450 and 500 us: 1 in 3 of 6 (a draw of 450 had had RTLS 3.8
- * % off, claimed, before the line counted its first stamps one apart);
- * 600 us, 15 to 30. So one is enough. */
+ * each time the stamps fitted the stream's rate no more (three early ones
+ * in a row, held ones no count fits: jitter of half a period or more, a
+ * stream that moved), the line it starts again from is as jittered as
+ * they are, and the joint states around it were taken at wrong times,
+ * which no phi_std counts. On the RX60 at 1 kHz, before the clock looked
+ * ahead, exponential transport delays on the joint stamps restarted it:
+ * 150 us mean, 2 in the window, RTLS 39 % off (not claimed: its misfit);
+ * 300 us, 20, REFINED 2.7 % off in mass at 3.6 phi_std, claimed until
+ * this check (with the look-ahead: none at either). Uniform jitter of 450
+ * and 500 us: 1 in 3 of 6 draws (one had RTLS 3.8 % off, claimed); 600
+ * us, 15 to 30. So one is enough. */
 
 static void check_joint_stamps(loadid_pipeline_t *p) {
     loadid_signals_stats_t s;
