@@ -327,9 +327,20 @@ int64_t probed_period(const loadid_signals::Held *held, int k) {
     return int64_t(std::llround(stamp_period(t, k, double(median))));
 }
 
+// Held stamps under half a period before the next one are a burst's
+// (states sampled a period apart, delivered at once and stamped on
+// arrival): each is dated a period before the next, from the newest back.
+// Taken as they came, a stream that began with a burst restarted the stamp
+// clock at once (early stamps in a row) and took 0.8 s to lock again.
+void back_date_burst(loadid_signals::Held *held, int count, int64_t p) {
+    for (int i = count - 2; i >= 0; --i)
+        if (held[i + 1].t - held[i].t < p / 2) held[i].t = held[i + 1].t - p;
+}
+
 // A joint state while probing: held (counted when it reaches the filters);
-// with period_probe + 1 of them the period is measured (probed_period), and
-// they go into the filters.
+// with period_probe + 1 of them the period is measured (probed_period), a
+// burst among them dated back (back_date_burst), and they go into the
+// filters.
 int probe(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *position,
           const loadid_real_t *setpoint) {
     int rc = hold(s, s->held, &s->held_count, t_us, num_joints, position, setpoint);
@@ -337,6 +348,7 @@ int probe(loadid_signals *s, int64_t t_us, int num_joints, const loadid_real_t *
     const int k = s->cfg.period_probe;
     if (s->held_count <= k) return 0;
     configure_for(s, std::clamp<int64_t>(probed_period(s->held, k), 50, 1000000));
+    back_date_burst(s->held, s->held_count, s->period_us);
     for (int i = 0; i < s->held_count; ++i) {
         const auto &e = s->held[i];
         rc = take(s, e.t, s->n, e.q, e.has_setpoint ? e.setpoint : nullptr);

@@ -457,9 +457,14 @@ static void joint_period_is_measured_from_the_stream(void **state) {
         const int64_t stamp = i < 6 ? 5000 + i : (int64_t)i * 1000;
         assert_int_equal(loadid_signals_push_joints(s, stamp, NJ, q, NULL), 0);
     }
-    print_message("probe after a burst: period %lld us\n",
-                  (long long)loadid_signals_joint_period_us(s));
+    loadid_signals_stats_t st;
+    loadid_signals_stats(s, &st);
+    print_message("probe after a burst: period %lld us, stamp clock restarts %lld\n",
+                  (long long)loadid_signals_joint_period_us(s), (long long)st.stamp_restarts);
     assert_true(loadid_signals_joint_period_us(s) == 1000);
+    /* The burst's states dated a period apart back from its last: the
+     * clock locks on them (taken as they came, 5 restarts). */
+    assert_true(st.stamp_restarts == 0 && st.joint_msgs_ok == 2000);
     assert_int_equal(loadid_signals_at(s, 1900300, NULL, NULL, NULL, &m, NULL), 0);
     loadid_kin_state_t want = truth_at(&kMeasured, seconds(1900300));
     assert_vec(m.alpha, want.alpha, 2e-3, "alpha after a bunched start");
