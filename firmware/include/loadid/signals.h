@@ -96,7 +96,9 @@ typedef struct {
      * when they reach the filters), the least-squares slope of their
      * stamps against their period counts (stamp_period of
      * src/stamp_clock.hpp) is the period P, and both filter banks are configured
-     * for it before the held states go in: nominal_step_us P, lag_steps
+     * for it before the held states go in (a burst among them, stamps
+     * under P / 2 before the next, dated P apart back from its newest):
+     * nominal_step_us P, lag_steps
      * lag_us / P (at most LOADID_JF_MAX_LAG), and max_joint_age_us and
      * max_step_us at least 2 P, so that a sample between two joint states
      * of a slow stream is served. A controller's joint stream runs at
