@@ -1101,7 +1101,8 @@ def test_joint_stamps_delayed_in_transport(recording, tmp_path, lcmtypes):
     sample time). After an exponential transport delay of 80 or 300 us
     mean at 1 kHz, or held 5 ms in every 50 and then delivered at once, the
     stamp clock counts each late stamp by the stamps after it and never
-    restarts (nor after a start in a burst: the period probe dates it back), and RTLS, RIV and REFINED find the load within the bounds and
+    restarts (nor after a start in a burst: the period probe dates it
+    back), and RTLS, RIV and REFINED find the load within the bounds and
     claim it (counted from each stamp alone, a stamp 0.75-1.25 periods late
     passed for a lost message: 300 us restarted the clock 19 times in the
     window, REFINED was 2.9 % off in mass and the others 82 %, nothing

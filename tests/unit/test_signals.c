@@ -526,10 +526,11 @@ static void check_regularised(loadid_signals_t *s, pending_t *pend, int64_t t, i
  * 2.75 rad/s: what the loop
  * leaves of the jitter, a few us, moves a joint by 1e-5 rad, ten encoder
  * steps; 3e-11 without jitter), the clock never restarted and locked. At
- * 450 us, nearly half a period, it restarts (2 seen, in the first 30 ms)
- * but locks, and the stamps are within 150 us (109 seen; 96 before the
- * look-ahead, and 1.2 ms with a first count of it by the held stamps'
- * median, which settled on a line 2 % short), alpha within 1 (0.44). */
+ * 450 us, nearly half a period, it may restart (1 seen, early; 2 before
+ * the probe dated short intervals a period back) but locks, and the
+ * stamps are within 150 us (101 seen; 96 before the look-ahead, and 1.2
+ * ms with a first count of it by the held stamps' median, which settled on
+ * a line 2 % short), alpha within 1 (0.43). */
 static void jittered_stamps_are_regularised(void **state) {
     (void)state;
     const int64_t jitters[] = {200, 400, 450};
