@@ -237,7 +237,7 @@ def write(out_dir, summary, meta, figures) -> dict:
         same = (a["kappa_set"] < b["kappa_set"]) == (a["kappa_sens"] > b["kappa_sens"])
         L += ["The paper: the trajectory with the lower kappa_set has the higher kappa_sens "
               "(tr1 7.72 against 8.18, but 23.2 against 16.9 on o1), and kappa_sens is two to "
-              "three times kappa_set. Here, on o1: kappa_set {a['kappa_set']:.3g} (tr1) against "
+              f"three times kappa_set. Here, on o1: kappa_set {a['kappa_set']:.3g} (tr1) against "
               f"{b['kappa_set']:.3g} (tr2), kappa_sens {a['kappa_sens']:.3g} against "
               f"{b['kappa_sens']:.3g}: " + ("the same order" if same else "not that order")
               + f", and kappa_sens / kappa_set {a['kappa_sens'] / a['kappa_set']:.2f} and "
