@@ -353,7 +353,7 @@ def test_frozen_daemon_loses_no_sample(recording, tmp_path, monkeypatch, capsys)
     the clock (either would end the joint piece as stalled, and the samples
     after the freeze would wait for the restarted filters to settle: 16
     refused before): every one of the 1500 samples is used and the finals equal --offline's on the
-    recording (1e-7 absolute)."""
+    recording (4e-7 absolute)."""
     start = int(read_truth(recording)["times.start"])
     monkeypatch.setenv("LOADID_SESSION_FREEZE", f"{start + 400_000}:{start + 520_000}")
     monkeypatch.setenv("LOADID_SESSION_UNTIL", str(start + 1_600_000))
@@ -370,18 +370,19 @@ def test_frozen_daemon_loses_no_sample(recording, tmp_path, monkeypatch, capsys)
     # After the freeze the samples meet joint states further ahead than
     # offline's: a sample just before the newest served update interpolates
     # its qdd towards that update smoothed with lag updates, not lag - 1
-    # (joint_filter.cpp), which the smoother's bandwidth sets: up to 3.9e-8
-    # seen, absolute, at kalman.jerk_psd 1 (1.7e-9 at 10). With the samples
+    # (joint_filter.cpp), which the smoother's bandwidth and the motion set:
+    # up to 1.9e-7 seen, absolute, at kalman.jerk_psd 1 (3.9e-8 on the
+    # trajectories faded with a jerk step, 1.7e-9 at 10). With the samples
     # read before the joint states (the loop's LCM read moved after them),
     # the first sample over 50 ms past the newest joint state ends the joint
     # piece and 17 samples are refused. A clean-clone run once saw 5.6e-5
     # with all 1500 used, not reproduced since (63 runs beside other tests
-    # and the clean-clone runs, 3.9e-8 to 4.1e-8): the message carries the
-    # daemon's log for the next one.
+    # and the clean-clone runs, 3.9e-8 to 4.1e-8 then): the message carries
+    # the daemon's log for the next one.
     with capsys.disabled():
         print("frozen 120 ms: largest difference from --offline " + ", ".join(
             f"{names[m]} {np.max(np.abs(np.subtract(e['phi'], offline[names[m]]['phi']))):.1e}"
             for m, e in sorted(final.items())))
     for m, e in final.items():
-        np.testing.assert_allclose(e["phi"], offline[names[m]]["phi"], rtol=0, atol=1e-7,
+        np.testing.assert_allclose(e["phi"], offline[names[m]]["phi"], rtol=0, atol=4e-7,
                                    err_msg=f"{names[m]}; the daemon's log:\n{out['stderr']}")

@@ -142,15 +142,19 @@ def slow_recording(tmp_path, robot, seed, simulation, *extra):
                     *extra)
 
 
-def real_data_like(tmp_path, robot="", seed=1):
+DRIFT = "[0.05, -0.04, 0.03, 0.002, -0.002, 0.001]"
+
+
+def real_data_like(tmp_path, robot="", seed=1, drift=DRIFT):
     """A recording like a slow real robot's and the four methods' results
     on it (the offset estimated): a trajectory of 0.1-0.4 Hz at 30 % of
-    its amplitude, no still phase and no ZERO, a drifting F/T bias,
-    1 m/s^2 of accelerometer bias and 200 us of time-stamp jitter on both
-    streams. robot: the configuration's robot section ("" the RX60)."""
+    its amplitude, no still phase and no ZERO, a drifting F/T bias (drift:
+    loadid-sim's per-second rates), 1 m/s^2 of accelerometer bias and 200
+    us of time-stamp jitter on both streams. robot: the configuration's
+    robot section ("" the RX60)."""
     rec = slow_recording(tmp_path, robot, seed,
                          "simulation:\n  zero: false\n  still_s: 0.3\n"
-                         "  drift: [0.05, -0.04, 0.03, 0.002, -0.002, 0.001]\n"
+                         f"  drift: {drift}\n"
                          "  accel_bias: [1.0, 0.0, 0.0]\n  jitter_us: 200\n"
                          "  trajectory_scale: 0.3\n  vibration_angular: 0.0\n"
                          "  noise:\n    angular: 0.0\n", "--values", tmp_path / "values.csv")
@@ -272,19 +276,25 @@ def test_slow_motion_claims_only_what_it_got_right(tmp_path, robot, seed):
 
 def test_refined_does_not_take_the_drift_for_a_joint_delay(tmp_path):
     """RX60, seed 8 of the real-data-like case (no delay simulated; the
-    offset drifts): REFINED's bandwidth and delay fits left the drift out,
-    took the joint stamps as 16.5 ms late at 6 standard errors and used
-    it (a UR5 draw 7.2 ms, another RX60 draw with zeroing 23 ms, mass
-    4.7 % off). With the drift's columns in those fits the delay is not
-    used and the mass stays within 5 % and 3 phi_std (seen 3.3 ms at std
-    1.5 ms; mass 2.4 %, z 1.8)."""
-    rec, result = real_data_like(tmp_path, "", 8)
-    refined = result[3]
+    offset drifts): REFINED's bandwidth and delay fits left the drift out
+    and took it for a joint delay (16.5 ms at 6 standard errors here; a
+    UR5 draw 7.2 ms, another RX60 draw with zeroing 23 ms, mass 4.7 % off).
+    With the drift's columns in those fits the delay is the one fitted on
+    the same draw without the drift: seen 4.66 and 4.39 ms, std 1.44 and
+    1.55 ms (0.2 std apart; 10 draws of both robots: at most 0.36 ms).
+    The delay is used on this draw, as on 7 of 40 draws of both robots,
+    drift or not: slow motion's misfit, not the drift (see the README).
+    Mass 2.0 % off, z 1.5."""
+    (tmp_path / "drift").mkdir()
+    (tmp_path / "none").mkdir()
+    rec, result = real_data_like(tmp_path / "drift", "", 8)
+    _, still = real_data_like(tmp_path / "none", "", 8, "[0, 0, 0, 0, 0, 0]")
+    refined, fit, fit_still = result[3], result[3]["refined"], still[3]["refined"]
     assert refined["method"] == "REFINED"
-    fit = refined["refined"]
-    print("delay", fit["joint_delay_s"], "std", fit["joint_delay_std_s"], fit["joint_delay_used"])
-    assert not fit["joint_delay_used"], fit
-    assert abs(fit["joint_delay_s"]) < 0.005, fit
+    print("delay", fit["joint_delay_s"], "std", fit["joint_delay_std_s"], fit["joint_delay_used"],
+          "without the drift", fit_still["joint_delay_s"], fit_still["joint_delay_std_s"])
+    assert abs(fit["joint_delay_s"] - fit_still["joint_delay_s"]) < 0.5 * min(
+        fit["joint_delay_std_s"], fit_still["joint_delay_std_s"]), (fit, fit_still)
     phi, _ = truth_phi(rec)
     m_t = phi[0]
     assert abs(refined["mass"] - m_t) / m_t < 0.05, refined["mass"]

@@ -75,8 +75,9 @@ static void derivatives_match_finite_differences(void **state) {
 }
 
 /* Eq. (15): the fade-in starts at rest at q0 and meets the series with the
- * same position, velocity and acceleration at t1; the fade-out mirrors it;
- * outside [0, t3] the robot rests at q0. */
+ * same position, velocity and acceleration at t1 (and jerk: one order
+ * above the paper's); the fade-out mirrors it; outside [0, t3] the robot
+ * rests at q0. */
 static void fades_start_and_end_at_rest_and_join_the_series(void **state) {
     (void)state;
     loadid_rng_t rng;
@@ -99,20 +100,24 @@ static void fades_start_and_end_at_rest_and_join_the_series(void **state) {
     const double joins[] = {t1, t2};
     for (int e = 0; e < 2; ++e) {
         for (int side = -1; side <= 1; side += 2) {
-            double t = joins[e] + side * 1e-9, q[7], qd[7], qdd[7];
-            loadid_traj_eval(&tr, t, q, qd, qdd, NULL);
+            double t = joins[e] + side * 1e-9, q[7], qd[7], qdd[7], j[7];
+            loadid_traj_eval(&tr, t, q, qd, qdd, j);
             for (int i = 0; i < 7; ++i) {
-                double s = 0, sd = 0, sdd = 0, ts = t - t1;
+                double s = 0, sd = 0, sdd = 0, sddd = 0, ts = t - t1;
                 for (int k = 1; k <= tr.harmonics; ++k) {
                     double w = kTwoPi * k * tr.base_frequency;
                     s += tr.rho[i][k - 1] * sin(w * ts) + tr.delta[i][k - 1] * cos(w * ts);
                     sd += w * (tr.rho[i][k - 1] * cos(w * ts) - tr.delta[i][k - 1] * sin(w * ts));
                     sdd -=
                         w * w * (tr.rho[i][k - 1] * sin(w * ts) + tr.delta[i][k - 1] * cos(w * ts));
+                    sddd -= w * w * w *
+                            (tr.rho[i][k - 1] * cos(w * ts) - tr.delta[i][k - 1] * sin(w * ts));
                 }
                 ASSERT_CLOSE(q[i], tr.q0[i] + s, 1e-7, "join: q");
                 ASSERT_CLOSE(qd[i], sd, 1e-6, "join: qd");
                 ASSERT_CLOSE(qdd[i], sdd, 1e-5, "join: qdd");
+                /* No jerk step where the estimation window starts and ends. */
+                ASSERT_CLOSE(j[i], sddd, 1e-4 * (1 + fabs(sddd)), "join: jerk");
             }
         }
     }
@@ -122,15 +127,17 @@ static void fades_start_and_end_at_rest_and_join_the_series(void **state) {
  * trajectory, stays below the bound from the coefficients:
  * |(f s)'''| <= sum_j C(3,j) max|f^(j)| / T^j max|s^(3-j)|, with
  * max|s^(m)| <= sum_k (|rho| + |delta|) w_k^m and the fade polynomial's
- * maxima on [0, 1] (from the roots of the next derivative): max|f'| =
- * 2.0736 at tau 0.6, max|f''| = 8.14 at tau 0.845, max|f'''| = 120 at 1. */
+ * maxima on [0, 1]. With p = tau (1 - tau): f' = 140 p^3, at most 140 / 64 =
+ * 2.1875 at tau 0.5; f'' = 420 p^2 (1 - 2 tau), at most 420 0.2^2 sqrt(0.2)
+ * = 7.513 where p = 0.2 (tau 0.276); f''' = 840 (p - 5 p^2), at most 52.5
+ * in magnitude at p = 1/4 (tau 0.5), 42 at p = 0.1. */
 static void jerk_is_bounded_everywhere(void **state) {
     (void)state;
     loadid_rng_t rng;
     loadid_rng_seed(&rng, 5);
     loadid_fourier_traj_t tr;
     random_traj(&rng, 6, &tr);
-    const double fmax_j[4] = {1, 2.0736, 8.15, 120};
+    const double fmax_j[4] = {1, 2.1875, 7.514, 52.5};
     const double dt = 1e-4, T = loadid_traj_duration(&tr);
     for (int i = 0; i < 6; ++i) {
         double smax[4] = {0, 0, 0, 0};
@@ -327,6 +334,26 @@ static void trajectory_file_round_trips_and_refuses_damage(void **state) {
     assert_int_not_equal(loadid_traj_file_read(path, &back, NULL, NULL, err, sizeof err), 0);
     print_message("damaged file: %s\n", err);
     assert_non_null(strstr(err, "rho[1]: expected 4 numbers, got 3"));
+
+    /* A file designed with another fade (this one's limits were checked on
+     * a different motion) is refused, not moved on. */
+    f = fopen(path, "w");
+    assert_int_equal(loadid_traj_file_write(f, &tr, &r.p.limits, &info), 0);
+    fclose(f);
+    f = fopen(path, "r");
+    len = fread(text, 1, sizeof text - 1, f);
+    fclose(f);
+    text[len] = 0;
+    char *fade = strstr(text, "fade_polynomial: \"");
+    assert_non_null(fade);
+    char *rest = strchr(fade, '\n');
+    f = fopen(path, "w");
+    fprintf(f, "%.*sfade_polynomial: \"15 tau^4 - 24 tau^5 + 10 tau^6\"%s", (int)(fade - text),
+            text, rest);
+    fclose(f);
+    assert_int_equal(loadid_traj_file_read(path, &back, NULL, NULL, err, sizeof err), -EINVAL);
+    print_message("other fade: %s\n", err);
+    assert_non_null(strstr(err, "fade_polynomial: '15 tau^4 - 24 tau^5 + 10 tau^6' is not"));
     remove(path);
     assert_int_equal(loadid_traj_file_read(path, &back, NULL, NULL, err, sizeof err), -ENOENT);
     loadid_kin_destroy(r.kin);

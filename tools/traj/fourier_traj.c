@@ -23,11 +23,12 @@ void loadid_traj_fade(double tau, double d[4]) {
         d[1] = d[2] = d[3] = 0;
         return;
     }
-    const double t2 = tau * tau, t3 = t2 * tau, u = 1 - tau;
-    d[0] = t2 * t2 * (15 - 24 * tau + 10 * t2);
-    d[1] = 60 * t3 * u * u; /* 60 tau^3 - 120 tau^4 + 60 tau^5 */
-    d[2] = 180 * t2 - 480 * t3 + 300 * t2 * t2;
-    d[3] = 360 * tau - 1440 * t2 + 1200 * t3;
+    /* f' = 140 p^3, f'' = 420 p^2 p', f''' = 840 p (1 - 5 p), p = tau (1 - tau). */
+    const double p = tau * (1 - tau), t2 = tau * tau;
+    d[0] = t2 * t2 * (35 - 84 * tau + 70 * t2 - 20 * t2 * tau);
+    d[1] = 140 * p * p * p;
+    d[2] = 420 * p * p * (1 - 2 * tau);
+    d[3] = 840 * p * (1 - 5 * p);
 }
 
 /* s and its first three time derivatives for joint i at series time ts. */

@@ -44,7 +44,7 @@ int loadid_traj_file_write(FILE *out, const loadid_fourier_traj_t *tr,
     fprintf(out, "]\n");
     fprintf(out, "base_frequency: %.17g\nharmonics: %d\nactive_s: %.17g\nfade_s: %.17g\n",
             tr->base_frequency, tr->harmonics, tr->active_s, tr->fade_s);
-    fprintf(out, "fade_polynomial: \"15 tau^4 - 24 tau^5 + 10 tau^6\"\n");
+    fprintf(out, "fade_polynomial: \"%s\"\n", LOADID_TRAJ_FADE_POLYNOMIAL);
     key_list(out, "", "q0", tr->q0, n);
     for (int c = 0; c < 2; ++c) {
         fprintf(out, "%s:\n", c ? "delta" : "rho");
@@ -143,6 +143,15 @@ static int read_doc(loadid_yaml_doc_t *doc, loadid_fourier_traj_t *tr,
              required(loadid_yaml_get_double(root, "active_s", &tr->active_s), root, "active_s")) ||
         (rc = required(loadid_yaml_get_double(root, "fade_s", &tr->fade_s), root, "fade_s")))
         return rc;
+    /* A file designed with another fade had its limits checked on a
+     * different motion: design it again rather than move the robot. */
+    char fade[64];
+    if ((rc = loadid_yaml_get_string(root, "fade_polynomial", fade, sizeof fade)) < 0) return rc;
+    if (rc == 1 && strcmp(fade, LOADID_TRAJ_FADE_POLYNOMIAL) != 0)
+        return loadid_yaml_fail(loadid_yaml_get(root, "fade_polynomial"),
+                                "'%s' is not this build's fade (" LOADID_TRAJ_FADE_POLYNOMIAL
+                                "): design the trajectory again with loadid-traj",
+                                fade);
     if (tr->harmonics < 1 || tr->harmonics > LOADID_TRAJ_MAX_HARMONICS)
         return loadid_yaml_fail(loadid_yaml_get(root, "harmonics"), "must be 1..%d",
                                 LOADID_TRAJ_MAX_HARMONICS);

@@ -10,7 +10,8 @@
  *   harmonics: 4
  *   active_s: 1.5
  *   fade_s: 0.5
- *   fade_polynomial: "15 tau^4 - 24 tau^5 + 10 tau^6"
+ *   fade_polynomial: "35 tau^4 - 84 tau^5 + 70 tau^6 - 20 tau^7"
+ *                             # f of fourier_traj.h; another one is refused
  *   q0: [n numbers]           # eq. (11)
  *   rho: [[N numbers] x n]    # sine coefficients, eq. (10)
  *   delta: [[N numbers] x n]  # cosine coefficients
