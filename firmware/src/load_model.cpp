@@ -47,7 +47,7 @@ Mat3 consistent_inertia(const Mat3 &Ic) {
 
 extern "C" void loadid_model_config_default(loadid_model_config_t *cfg) {
     if (!cfg) return;
-    cfg->mass_rel_std = Real(0.05);
+    cfg->mass_rel_std = Real(0.025);
     cfg->com_std = Real(0.005);
     cfg->inertia_rel_std = Real(0.15);
     cfg->max_gyration = Real(0.5);

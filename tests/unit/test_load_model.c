@@ -177,13 +177,16 @@ static void test_groups_and_bad_input(void **state) {
     assert_int_equal(m.why[1], LOADID_WHY_STD);
     assert_true(fabs(m.over[1] - hypot(0.006, 0.02 * std[0]) / 0.005) < 1e-12);
     assert_int_equal(m.why[2], LOADID_WHY_NEEDS);
-    /* mass std 6 % > 5 %: nothing. */
+    /* mass std 2.4 % <= 2.5 % (2 sigma within 5 %): the mass; 3 %: nothing. */
     small_std(phi, std);
-    std[0] = 0.06;
+    std[0] = 0.024;
+    assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
+    assert_true(m.identified & LOADID_IDENT_MASS);
+    std[0] = 0.03;
     assert_int_equal(loadid_load_model(phi, std, NULL, &cfg, &m), 0);
     assert_int_equal(m.identified, 0);
     assert_int_equal(m.why[0], LOADID_WHY_STD);
-    assert_true(fabs(m.over[0] - 0.06 / 0.05) < 1e-12);
+    assert_true(fabs(m.over[0] - 0.03 / 0.025) < 1e-12);
     assert_int_equal(m.why[1], LOADID_WHY_NEEDS);
     assert_int_equal(m.why[2], LOADID_WHY_NEEDS);
     /* Inertia: its largest element std against 15 % of the inertia's

@@ -64,7 +64,7 @@ typedef enum {
 } loadid_ident_why_t;
 
 typedef struct {
-    loadid_real_t mass_rel_std;     /* [-], default 0.05 */
+    loadid_real_t mass_rel_std;     /* [-], default 0.025 */
     loadid_real_t com_std;          /* [m], default 0.005 */
     loadid_real_t inertia_rel_std;  /* [-], default 0.15 */
     loadid_real_t max_gyration;     /* [m], default 0.5 */

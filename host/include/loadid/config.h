@@ -223,7 +223,7 @@ typedef struct {
     /* model: (loadid) identified groups and the load model
      * (firmware/include/loadid/load_model.h): thresholds and the fallback
      * density of an unidentified inertia */
-    double model_mass_rel_std;     /* [-], default 0.05 */
+    double model_mass_rel_std;     /* [-], default 0.025 */
     double model_com_std;          /* [m], default 0.005 */
     double model_inertia_rel_std;  /* [-], default 0.15 */
     double model_max_gyration;     /* [m], default 0.5 */

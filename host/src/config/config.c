@@ -118,7 +118,7 @@ void loadid_config_default(loadid_config_t *cfg) {
     cfg->rt_cpu = -1;
     cfg->kalman_spec_sigma = 0.5;
     cfg->kalman_alpha_sigma = 1.0;
-    cfg->model_mass_rel_std = 0.05;
+    cfg->model_mass_rel_std = 0.025;
     cfg->model_com_std = 0.005;
     cfg->model_inertia_rel_std = 0.15;
     cfg->model_max_gyration = 0.5;
