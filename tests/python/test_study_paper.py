@@ -124,7 +124,7 @@ def test_report_numbers_are_runs_csv(paper):
     for k in ("rtls_mass_fig6", "rtls_mass_fig7"):
         assert f"| {h[k]:.3g} % |" in md, k
     assert f"{h['rtls_ixx_fig6']:.3g} % / {h['rls_ixx_fig6']:.3g} % / {h['riv_ixx_fig6']:.3g} %" in md
-    # Every placeholder filled in (one sentence had lost its f prefix).
+    # No format field left unformatted (one sentence had lost its f prefix).
     assert "{" not in md and "}" not in md, [l for l in md.splitlines() if "{" in l or "}" in l]
     o1 = {t["trajectory"]: t for t in rep["table1"] if t["load"] == "o1"}
     assert f"Here, on o1: kappa_set {o1['tr1']['kappa_set']:.3g} (tr1)" in md
