@@ -100,7 +100,7 @@ def tables(out: str):
 
 def medians(runs, truth, source, method):
     e = np.array([eq37(phi, truth) for _, phi in runs[(source, method)] if phi is not None])
-    return np.median(e, axis=0), e
+    return np.median(e, axis=0)
 
 
 def check_printed(out: str, runs, truth, seeds: int):
@@ -112,7 +112,7 @@ def check_printed(out: str, runs, truth, seeds: int):
         bad.append(f"tables for {sorted(found)}, runs of {sources}")
     for src, cols in found.items():
         for m, printed in cols.items():
-            med, _ = medians(runs, truth, src, m)
+            med = medians(runs, truth, src, m)
             # printed with 3 significant digits at most
             for p, x, y in zip(PARAMS, printed, med):
                 if not math.isclose(x, y, rel_tol=0.006, abs_tol=0.006):
@@ -121,9 +121,9 @@ def check_printed(out: str, runs, truth, seeds: int):
         # better than RLS and RIV, recomputed here.
         lines = [l for l in out.splitlines() if l.split()[:1] == ["RTLS"] and "paper" in l]
         line = lines[list(found).index(src)] if len(lines) == len(found) else ""
-        rt_med, _ = medians(runs, truth, src, "RTLS")
+        rt_med = medians(runs, truth, src, "RTLS")
         for other in ("RLS", "RIV"):
-            o_med, _ = medians(runs, truth, src, other)
+            o_med = medians(runs, truth, src, other)
             p = int(np.sum(rt_med < o_med))
             # Per seed; a run without an estimate (not excited) is no win.
             theirs = dict(runs[(src, other)])
