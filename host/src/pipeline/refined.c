@@ -372,6 +372,45 @@ static double fit_residual(const loadid_refined_t *r, int n_params, const loadid
     return yy - fit;
 }
 
+/* The weighted residual of the fit x (fit_cols columns) in the motion's
+ * band: per stretch of BAND_BLOCK_US of the samples' time and per row, the
+ * residual's sum squared over the stretch's samples, summed. White noise
+ * gives one per row and stretch whatever the smoother; what a smoother's
+ * noise adds above the band averages out of the stretches as it does out
+ * of phi, while its blunting, or a narrow smoother's slow error, stays in
+ * them as it stays in phi. */
+#define BAND_BLOCK_US 100000
+static double band_residual(const loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
+                            double force_sigma, double torque_sigma, int64_t t_ref,
+                            const double *x) {
+    const int n = n_params, cols = fit_cols(n, t_ref);
+    loadid_real_t phi[16];
+    for (int p = 0; p < n; ++p) phi[p] = (loadid_real_t)x[p];
+    double sum[6] = {0}, out = 0;
+    int count = 0;
+    int64_t block = INT64_MIN;
+    for (int i = 0; i <= r->scount; ++i) {
+        const int64_t b = i < r->scount ? (r->s[i].t - r->s[0].t) / BAND_BLOCK_US : INT64_MAX;
+        if (b != block && count > 0) {
+            for (int row = 0; row < 6; ++row) out += sq(sum[row]) / count, sum[row] = 0;
+            count = 0;
+        }
+        block = b;
+        if (i == r->scount || !r->kin_ok[i]) continue;
+        const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
+        loadid_real_t A[6 * 16], pred[6];
+        if (loadid_regressor_model_zeroed(k, k + 3, k + 6, n, zero_a, A)) continue;
+        loadid_regressor_apply(A, n, phi, pred);
+        const double dt = drift_dt(r, i, t_ref);
+        for (int row = 0; row < 6; ++row)
+            sum[row] +=
+                ((double)r->s[i].y[row] - (double)pred[row] - drift_part(x, n, cols, row, dt)) /
+                (row < 3 ? force_sigma : torque_sigma);
+        count++;
+    }
+    return out;
+}
+
 /* One Gauss-Newton step of the joint stamps' delay against the wrench's,
  * and its standard error. With phi the least-squares fit at delay d, the
  * residual r = y - A(t + d) phi is to first order (D - d) c, c the
@@ -591,8 +630,13 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     /* The smoother's bandwidth from the data: of ten times the configured
      * jerk PSD, it and three lower ones (each a factor 10, the bandwidth
      * 1.47 times lower), the one whose kinematics explain the measured
-     * wrench best. A smoother too wide keeps what the encoders see but the
-     * load does not (backlash, noise); one too narrow blunts the motion. */
+     * wrench best in the motion's band (band_residual). A smoother too
+     * wide keeps what the encoders see but the load does not (backlash,
+     * noise); one too narrow blunts the motion. The whole residual weighs
+     * the first's noise, which averages out of phi, as much as the
+     * blunting, which does not: at 2^14 counts on the UR5 its least (a
+     * PSD of 0.1) left REFINED's inertia 1.5-2.5 times the reference's
+     * error, the band's (1) about equal to it. */
     /* With the offset estimated, its drift too; with zeroing, the drift
      * since zeroing when the caller found one: in every fit below. */
     const int64_t t_ref =
@@ -605,10 +649,14 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
         jf.jerk_psd = (loadid_real_t)((double)r->jf.jerk_psd * pow(10.0, 1 - trial));
         const int64_t n = kinematics(r, &jf);
         if (n < 2) continue;
-        const double rss = fit_residual(r, n_params, zero_a, rep->levels.force, rep->levels.torque,
-                                        t_ref, NULL, NULL, NULL);
-        if (!(rss < best)) continue;
-        best = rss, best_psd = (double)jf.jerk_psd, used = n, best_count = r->count;
+        double x[MAX_COLS];
+        if (!isfinite(fit_residual(r, n_params, zero_a, rep->levels.force, rep->levels.torque,
+                                   t_ref, NULL, x, NULL)))
+            continue;
+        const double band =
+            band_residual(r, n_params, zero_a, rep->levels.force, rep->levels.torque, t_ref, x);
+        if (!(band < best)) continue;
+        best = band, best_psd = (double)jf.jerk_psd, used = n, best_count = r->count;
         swap_best(r); /* keep this trial's kinematics and smoothed joints */
     }
     if (used < 2) return LOADID_E_NO_DATA;
