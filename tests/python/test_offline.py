@@ -1193,7 +1193,7 @@ def test_joint_delay_standard_error_matches_its_error_over_seeds(trajectory, tmp
 
 def test_slow_motion_joint_delay_standard_error_matches_its_error_over_seeds(tmp_path):
     """The UR5's slow trajectory of the real-data-like case's seed 7 (1.5 s
-    at |omega| <= 0.1 rad/s), forty noise draws, no delay simulated. The
+    of |omega| 0.37 rad/s RMS), forty noise draws, no delay simulated. The
     delay is weakly told there (std 2-7 ms), and the ten stretches' scores,
     which the offset's and the drift's columns tie together, said about
     half of the fit's spread: on seed 7 itself a 13.9 ms delay at 5.3

@@ -423,7 +423,7 @@ static double band_residual(const loadid_refined_t *r, int n_params, const loadi
  * count. It is never below white rows' at the residual's scale,
  * rss / (rows - cols) / J: ten blocks of a smooth c_p, whose scores the
  * fit's columns (offset, drift) tie together, said half of that on slow
- * motion (1.5 s at |omega| <= 0.1 rad/s: 2.6 ms where 60 noise draws of
+ * motion (1.5 s, |omega| 0.37 rad/s RMS: 2.6 ms where 60 noise draws of
  * one trajectory spread 5.6 ms and white rows said 4.7), and a delay of
  * 5-14 ms was used in 7 of 40 draws simulated without one. step and std
  * in us; step 0 when it cannot be taken. */
