@@ -330,6 +330,24 @@ static double drift_part(const double *x, int n, int cols, int row, double dt) {
     return cols > n ? x[n + row] * dt : 0;
 }
 
+/* Sample i's residual under a fit x of fit_cols(n, t_ref) columns (phi:
+ * its first n, as reals): y - A phi less the drift's part, per row.
+ * Returns 0, or -1 when the sample has no kinematics or regressor. */
+static int sample_residual(const loadid_refined_t *r, int i, int n, const loadid_real_t *zero_a,
+                           int64_t t_ref, const double *x, const loadid_real_t *phi,
+                           double res[6]) {
+    if (!r->kin_ok[i]) return -1;
+    const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
+    loadid_real_t A[6 * 16], pred[6];
+    if (loadid_regressor_model_zeroed(k, k + 3, k + 6, n, zero_a, A)) return -1;
+    loadid_regressor_apply(A, n, phi, pred);
+    const int cols = fit_cols(n, t_ref);
+    const double dt = drift_dt(r, i, t_ref);
+    for (int row = 0; row < 6; ++row)
+        res[row] = (double)r->s[i].y[row] - (double)pred[row] - drift_part(x, n, cols, row, dt);
+    return 0;
+}
+
 /* The weighted residual of a least-squares fit on the stored kinematics
  * (rows weighted by force_sigma, torque_sigma; fit_cols columns), by the
  * normal equations; +Inf when they are singular. rss_group (may be NULL):
@@ -358,15 +376,9 @@ static double fit_residual(const loadid_refined_t *r, int n_params, const loadid
         for (int p = 0; p < n; ++p) phi[p] = (loadid_real_t)x[p];
         rss_group[0] = rss_group[1] = 0;
         for (int i = 0; i < r->scount; ++i) {
-            if (!r->kin_ok[i]) continue;
-            const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
-            loadid_real_t A[6 * 16], pred[6];
-            if (loadid_regressor_model_zeroed(k, k + 3, k + 6, n, zero_a, A)) continue;
-            loadid_regressor_apply(A, n, phi, pred);
-            const double dt = drift_dt(r, i, t_ref);
-            for (int row = 0; row < 6; ++row)
-                rss_group[row / 3] += sq((double)r->s[i].y[row] - (double)pred[row] -
-                                         drift_part(x, n, cols, row, dt));
+            double res[6];
+            if (sample_residual(r, i, n, zero_a, t_ref, x, phi, res)) continue;
+            for (int row = 0; row < 6; ++row) rss_group[row / 3] += sq(res[row]);
         }
     }
     return yy - fit;
@@ -383,9 +395,8 @@ static double fit_residual(const loadid_refined_t *r, int n_params, const loadid
 static double band_residual(const loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
                             double force_sigma, double torque_sigma, int64_t t_ref,
                             const double *x) {
-    const int n = n_params, cols = fit_cols(n, t_ref);
     loadid_real_t phi[16];
-    for (int p = 0; p < n; ++p) phi[p] = (loadid_real_t)x[p];
+    for (int p = 0; p < n_params; ++p) phi[p] = (loadid_real_t)x[p];
     double sum[6] = {0}, out = 0;
     int count = 0;
     int64_t block = INT64_MIN;
@@ -396,16 +407,10 @@ static double band_residual(const loadid_refined_t *r, int n_params, const loadi
             count = 0;
         }
         block = b;
-        if (i == r->scount || !r->kin_ok[i]) continue;
-        const loadid_real_t *k = r->kin_store + 9 * (size_t)i;
-        loadid_real_t A[6 * 16], pred[6];
-        if (loadid_regressor_model_zeroed(k, k + 3, k + 6, n, zero_a, A)) continue;
-        loadid_regressor_apply(A, n, phi, pred);
-        const double dt = drift_dt(r, i, t_ref);
+        double res[6];
+        if (i == r->scount || sample_residual(r, i, n_params, zero_a, t_ref, x, phi, res)) continue;
         for (int row = 0; row < 6; ++row)
-            sum[row] +=
-                ((double)r->s[i].y[row] - (double)pred[row] - drift_part(x, n, cols, row, dt)) /
-                (row < 3 ? force_sigma : torque_sigma);
+            sum[row] += res[row] / (row < 3 ? force_sigma : torque_sigma);
         count++;
     }
     return out;
