@@ -392,6 +392,15 @@ static double fit_residual(const loadid_refined_t *r, int n_params, const loadid
  * of phi, while its blunting, or a narrow smoother's slow error, stays in
  * them as it stays in phi. */
 #define BAND_BLOCK_US 100000
+
+/* Adds a stretch's sums (sum[6] over *count samples) to *out, squared
+ * over the count, and empties it. */
+static void band_flush(double sum[6], int *count, double *out) {
+    if (*count > 0)
+        for (int row = 0; row < 6; ++row) *out += sq(sum[row]) / *count, sum[row] = 0;
+    *count = 0;
+}
+
 static double band_residual(const loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
                             double force_sigma, double torque_sigma, int64_t t_ref,
                             const double *x) {
@@ -399,20 +408,17 @@ static double band_residual(const loadid_refined_t *r, int n_params, const loadi
     for (int p = 0; p < n_params; ++p) phi[p] = (loadid_real_t)x[p];
     double sum[6] = {0}, out = 0;
     int count = 0;
-    int64_t block = INT64_MIN;
-    for (int i = 0; i <= r->scount; ++i) {
-        const int64_t b = i < r->scount ? (r->s[i].t - r->s[0].t) / BAND_BLOCK_US : INT64_MAX;
-        if (b != block && count > 0) {
-            for (int row = 0; row < 6; ++row) out += sq(sum[row]) / count, sum[row] = 0;
-            count = 0;
-        }
-        block = b;
+    int64_t block = 0;
+    for (int i = 0; i < r->scount; ++i) {
+        const int64_t b = (r->s[i].t - r->s[0].t) / BAND_BLOCK_US;
+        if (b != block) band_flush(sum, &count, &out), block = b;
         double res[6];
-        if (i == r->scount || sample_residual(r, i, n_params, zero_a, t_ref, x, phi, res)) continue;
+        if (sample_residual(r, i, n_params, zero_a, t_ref, x, phi, res)) continue;
         for (int row = 0; row < 6; ++row)
             sum[row] += res[row] / (row < 3 ? force_sigma : torque_sigma);
         count++;
     }
+    band_flush(sum, &count, &out);
     return out;
 }
 
@@ -641,7 +647,8 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
      * the first's noise, which averages out of phi, as much as the
      * blunting, which does not: at 2^14 counts on the UR5 its least (a
      * PSD of 0.1) left REFINED's inertia 1.5-2.5 times the reference's
-     * error, the band's (1) about equal to it. */
+     * error (the study's medians over the loads), the band's (1) about
+     * equal to it. */
     /* With the offset estimated, its drift too; with zeroing, the drift
      * since zeroing when the caller found one: in every fit below. */
     const int64_t t_ref =
