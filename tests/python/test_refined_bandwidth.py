@@ -15,7 +15,6 @@ from __future__ import annotations
 import json
 import os
 import pathlib
-import subprocess
 import sys
 
 import numpy as np
@@ -28,30 +27,30 @@ import loadid_study as st  # noqa: E402
 
 
 def test_refined_bandwidth_under_coarse_encoders_matches_the_reference(tmp_path):
+    """Four recordings through the study's own run_recording (simulation,
+    loadidd --offline, the reference), on its trajectory design."""
     build = pathlib.Path(os.environ["LOADIDD_EXE"]).resolve().parents[1]
     robot, load, cell = "ur5", "hollow", "paper_enc14"
     traj_cfg = tmp_path / "traj-config.yaml"
     traj_cfg.write_text(st.robot_yaml(robot))
-    (tmp_path / "traj").mkdir()
+    traj = tmp_path / "traj.yaml"
     run_tool([program("LOADID_TRAJ_EXE"), "--config", traj_cfg, *st.TRAJ_BUDGET, "--quiet",
-              "--out", tmp_path / "traj" / "traj.yaml"])
-    sim_cfg = tmp_path / "sim.yaml"
+              "--out", traj])
+    sim_cfg, est_cfg = tmp_path / "sim.yaml", tmp_path / "est.yaml"
     sim_cfg.write_text(st.sim_config(robot, load, cell))
-    est_cfg = tmp_path / "est.yaml"
     est_cfg.write_text(st.est_config(robot, cell, ["REFINED"]))
     ratios, psds = [], []
     for seed in range(1, 5):
-        rec = tmp_path / f"rec{seed}"
-        run_tool([program("LOADID_SIM_EXE"), "--config", sim_cfg, "--trajectory",
-                  tmp_path / "traj" / "traj.yaml", "--out", rec, "--seed",
-                  str(st.sim_seed(robot, load, cell, seed)), "--load-name", load])
-        r = subprocess.run([program("LOADIDD_EXE"), "--config", str(est_cfg), "--offline",
-                            str(rec)], capture_output=True, text=True, timeout=300, check=True)
-        (refined,) = json.loads(r.stdout)
-        truth = st.read_truth_file(rec)["phi"]
-        ref = st.reference(rec, build)["REF"]
-        ratios.append(st.errors(np.array(refined["phi"]), truth)["inertia_pct"]
-                      / st.errors(ref, truth)["inertia_pct"])
+        name = f"{robot}-{load}-s{seed}"
+        rows = st.run_recording(dict(
+            build=str(build), workdir=str(tmp_path), rec_name=name, robot=robot, load=load,
+            seed=seed, sim_seed=st.sim_seed(robot, load, cell, seed), sim_config=sim_cfg,
+            trajectory=traj, cells=[dict(noise=cell, est_config=est_cfg)],
+            methods=["REFINED"], keep=False))
+        err = {r["method"]: r for r in rows}
+        assert err["REFINED"]["ok"] and err["REF"]["ok"], rows
+        ratios.append(err["REFINED"]["inertia_pct"] / err["REF"]["inertia_pct"])
+        (refined,) = json.loads((tmp_path / "results" / f"{name}-{cell}.json").read_text())
         psds.append(refined["refined"]["jerk_psd"])
     print("REFINED / REF inertia", np.round(ratios, 2), "jerk PSD", psds)
     # Seen 0.67-1.37 (median 1.1); 1.7-3.7 (median 2.9) by the whole residual.
