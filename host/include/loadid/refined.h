@@ -19,7 +19,8 @@
  *            derivative, with a standard error from its scores over
  *            ten stretches of the window; used when 1 ms or more, at
  *            least 3 standard errors, and it lowers the residual
- *            (below 1 ms, the fit sees the misfit's phase too);
+ *            (below 1 ms, the fit sees the misfit's phase too), and then
+ *            phi_std gains what its standard error moves phi by;
  *            reported, and warned about when used: the on-line methods
  *            carry it unless kalman.joint_delay_s says it.
  *   sources  a - g, omega and alpha all from the smoothed joints. The
@@ -78,6 +79,7 @@ typedef struct {
     int joint_delay_used;         /* REFINED took its kinematics that much later
                                   (a delay of 1 ms or more, at least 3 standard
                                   errors, that lowers the residual) */
+    double delay_var[10];         /* what fitting a used delay adds to phi's variance */
     int drift_fitted;             /* the offset's linear drift was fitted (refined_run) */
     double drift[6];              /* [N/s, N m/s], taken out of the wrench fed */
     double drift_var[10];         /* what estimating it adds to phi's variance */

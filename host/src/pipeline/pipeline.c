@@ -427,7 +427,8 @@ static int uncertainty_of(const loadid_pipeline_t *p, int m, const loadid_real_t
  * offset's drift taken out of the wrench: with the offset estimated always
  * (the estimator fits it, loadid_est_drift_fitted), with zeroing when the
  * drift check found one (phi less its pull, the variance plus what
- * fitting it costs); REFINED fits it itself (refined.h). */
+ * fitting it costs); REFINED fits it itself, and a joint delay, and adds
+ * what both cost (refined.h). */
 static void final_phi(const loadid_pipeline_t *p, int m, loadid_real_t *phi, loadid_real_t *std,
                       loadid_real_t *scale) {
     *scale = 0;
@@ -446,14 +447,15 @@ static void final_phi(const loadid_pipeline_t *p, int m, loadid_real_t *phi, loa
     }
     if (uncertainty_of(p, m, phi, std, scale) != 0)
         for (int i = 0; i < 16; ++i) std[i] = (loadid_real_t)INFINITY;
-    const double *extra = NULL; /* what fitting the drift costs */
-    if (zeroed_drift)
-        extra = p->drift_result.extra_var;
-    else if (m == p->refined_m && p->refined_rep.drift_fitted)
-        extra = p->refined_rep.drift_var;
-    if (extra)
-        for (int i = 0; i < 10; ++i)
-            std[i] = (loadid_real_t)sqrt((double)std[i] * (double)std[i] + extra[i]);
+    double extra[10] = {0}; /* what fitting the drift and a joint delay costs */
+    const loadid_refined_report_t *ref = &p->refined_rep;
+    for (int i = 0; i < 10; ++i) {
+        if (zeroed_drift)
+            extra[i] = p->drift_result.extra_var[i];
+        else if (m == p->refined_m)
+            extra[i] = (ref->drift_fitted ? ref->drift_var[i] : 0) + ref->delay_var[i];
+        std[i] = (loadid_real_t)sqrt((double)std[i] * (double)std[i] + extra[i]);
+    }
 }
 
 /* At DONE, a method the noise-ratio gate refused whose solution is unique

@@ -441,12 +441,13 @@ static double band_residual(const loadid_refined_t *r, int n_params, const loadi
 #define DELAY_BLOCKS 10
 typedef struct {
     double step, std;
+    double b[LOADID_NPHI]; /* phi's part of b: phi's move per us of delay */
 } delay_step_t;
 
 static delay_step_t delay_step(const loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
                                double force_sigma, double torque_sigma, int64_t t_ref) {
     const int n = n_params, cols = fit_cols(n, t_ref);
-    delay_step_t out = {0, INFINITY};
+    delay_step_t out = {0, INFINITY, {0}};
     double x[MAX_COLS], M[MAX_COLS * MAX_COLS];
     const double rss = fit_residual(r, n, zero_a, force_sigma, torque_sigma, t_ref, NULL, x, M);
     const double dof = 6.0 * (double)kin_count(r) - cols;
@@ -508,6 +509,7 @@ static delay_step_t delay_step(const loadid_refined_t *r, int n_params, const lo
     double var = 0;
     for (int k = 0; k < DELAY_BLOCKS; ++k) var += sq(score[k] - sum / DELAY_BLOCKS);
     out.step = sum / J;
+    for (int p = 0; p < LOADID_NPHI && p < n; ++p) out.b[p] = b[p];
     out.std = fmax(sqrt(var * DELAY_BLOCKS / (DELAY_BLOCKS - 1.0)) / J, sqrt(rss / dof / J));
     return out;
 }
@@ -518,7 +520,9 @@ static delay_step_t delay_step(const loadid_refined_t *r, int n_params, const lo
  * joints of the best smoothing (r->count entries). Returns the delay
  * [us] and its standard error (*std_us); the kinematics are left at it
  * when it is at least DELAY_USE_US and DELAY_SIGNIFICANT standard errors
- * and lowers the residual, else at 0 (*used says which). Below 1 ms the
+ * and lowers the residual, else at 0 (*used says which). A used delay's
+ * error moves phi by b per us (delay_step): var[10] gets b^2 std^2, what
+ * fitting it costs phi (0 when not used). Below 1 ms the
  * fit mostly sees the misfit's phase (servo lag, backlash): simulated
  * without a delay, -1.0 to +0.35 ms, and using it left REFINED's median
  * inertia error 5 % worse (2.35 % against 2.24 %, 120 recordings). */
@@ -527,7 +531,7 @@ static delay_step_t delay_step(const loadid_refined_t *r, int n_params, const lo
 #define DELAY_SIGNIFICANT 3.0
 static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t *zero_a,
                          double force_sigma, double torque_sigma, int64_t t_ref, double *std_us,
-                         int *used_it) {
+                         int *used_it, double var[LOADID_NPHI]) {
     const int count = r->count;
     /* The kinematics at 0 are in place (the best smoothing's). */
     const double rss0 =
@@ -535,8 +539,10 @@ static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t 
         (double)kin_count(r);
     double d = 0;
     *std_us = INFINITY;
+    memset(var, 0, LOADID_NPHI * sizeof *var);
+    delay_step_t step = {0, INFINITY, {0}};
     for (int it = 0; it < 4; ++it) {
-        const delay_step_t step = delay_step(r, n_params, zero_a, force_sigma, torque_sigma, t_ref);
+        step = delay_step(r, n_params, zero_a, force_sigma, torque_sigma, t_ref);
         d = fmax(-DELAY_MAX_US, fmin(DELAY_MAX_US, d + step.step));
         *std_us = step.std;
         const int64_t used = kinematics_at(r, count, llround(d));
@@ -554,6 +560,7 @@ static int64_t fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t 
                                     : INFINITY;
         if (rss < rss0) {
             *used_it = 1;
+            for (int p = 0; p < LOADID_NPHI; ++p) var[p] = sq(step.b[p] * step.std);
             return delay;
         }
     }
@@ -677,7 +684,8 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     jf.jerk_psd = (loadid_real_t)best_psd;
     rep->jerk_psd = best_psd;
     rep->joint_delay_us = fit_delay(r, n_params, zero_a, rep->levels.force, rep->levels.torque,
-                                    t_ref, &rep->joint_delay_std_us, &rep->joint_delay_used);
+                                    t_ref, &rep->joint_delay_std_us, &rep->joint_delay_used,
+                                    rep->delay_var);
     used = kin_count(r);
     double smooth_sigma[3];
     loadid_jf_steady_sigma(&jf, 1e-3, 1, smooth_sigma);
