@@ -1197,7 +1197,7 @@ def test_slow_motion_joint_delay_standard_error_matches_its_error_over_seeds(tmp
     half of the fit's spread: on seed 7 itself a 13.9 ms delay at 5.3
     standard errors was used (mass 3.6 % off). The standard error is now
     never below white rows' at the residual's scale. Measured over these
-    draws: RMS of delay / std 1.45, one over 2.9, none used (the scores
+    draws: RMS of delay / std 1.49, one over 2.9, none used (the scores
     alone: three used and failed here; white force noise alone still
     gave 1.28)."""
     ur5 = f"robot:\n  urdf: {UR5}\n"

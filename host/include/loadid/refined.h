@@ -8,11 +8,12 @@
  *            are smoothed by the RTS smoother of the joint filter's model
  *            (no lag), and q, qd, qdd interpolated to each sensor sample's
  *            time; forward kinematics gives omega, alpha and a - g. The
- *            smoother's bandwidth is chosen from the data: of
- *            kalman.jerk_psd and four lower ones (factors of 10), the one
- *            whose kinematics let a least-squares fit explain the measured
- *            wrench best (too wide keeps backlash and noise the load does
- *            not feel, too narrow blunts the motion).
+ *            smoother's bandwidth is chosen from the data: of ten times
+ *            kalman.jerk_psd, it and three lower ones (factors of 10),
+ *            then half a decade beside the best, the one whose kinematics
+ *            let a least-squares fit explain the measured wrench best in
+ *            the motion's band (too wide keeps backlash and noise the load
+ *            does not feel, too narrow blunts the motion).
  *   delay    the joint stamps' delay against the wrench's (a transport
  *            or clock offset: 5 ms of it cost 14 % of Ixx about the COM),
  *            fitted by Gauss-Newton on the predicted wrench's time
