@@ -447,14 +447,14 @@ static void final_phi(const loadid_pipeline_t *p, int m, loadid_real_t *phi, loa
     }
     if (uncertainty_of(p, m, phi, std, scale) != 0)
         for (int i = 0; i < 16; ++i) std[i] = (loadid_real_t)INFINITY;
-    double extra[10] = {0}; /* what fitting the drift and a joint delay costs */
     const loadid_refined_report_t *ref = &p->refined_rep;
     for (int i = 0; i < 10; ++i) {
+        double extra = 0; /* what fitting the drift and a joint delay costs */
         if (zeroed_drift)
-            extra[i] = p->drift_result.extra_var[i];
+            extra = p->drift_result.extra_var[i];
         else if (m == p->refined_m)
-            extra[i] = (ref->drift_fitted ? ref->drift_var[i] : 0) + ref->delay_var[i];
-        std[i] = (loadid_real_t)sqrt((double)std[i] * (double)std[i] + extra[i]);
+            extra = (ref->drift_fitted ? ref->drift_var[i] : 0) + ref->delay_var[i];
+        if (extra > 0) std[i] = (loadid_real_t)sqrt((double)std[i] * (double)std[i] + extra);
     }
 }
 

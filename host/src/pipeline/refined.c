@@ -715,18 +715,15 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
             bandwidth_trial(r, &jf, sqrt(psd[best_trial] * psd[nb]), n_params, zero_a, &rep->levels,
                             t_ref, &pick);
     }
-    const double best_psd = pick.psd;
-    int64_t used = pick.used;
-    const int best_count = pick.count;
-    if (used < 2) return LOADID_E_NO_DATA;
+    if (pick.used < 2) return LOADID_E_NO_DATA;
     swap_best(r); /* the best back in place */
-    r->count = best_count;
-    jf.jerk_psd = (loadid_real_t)best_psd;
-    rep->jerk_psd = best_psd;
+    r->count = pick.count;
+    jf.jerk_psd = (loadid_real_t)pick.psd;
+    rep->jerk_psd = pick.psd;
     rep->joint_delay_us =
         fit_delay(r, n_params, zero_a, rep->levels.force, rep->levels.torque, t_ref,
                   &rep->joint_delay_std_us, &rep->joint_delay_used, rep->delay_var);
-    used = kin_count(r);
+    const int64_t used = kin_count(r);
     double smooth_sigma[3];
     loadid_jf_steady_sigma(&jf, 1e-3, 1, smooth_sigma);
 
