@@ -31,7 +31,11 @@ namespace {
 
 constexpr int kMaxJoints = 16;
 constexpr int kRing = 2 * LOADID_JF_MAX_LAG + 1; // fixed-lag history, updates
-constexpr size_t kWorkPerSample = 9;             // smoother: x (3) and the upper triangle of P (6)
+// Smoother: per sample the filtered x (3) and upper triangle of P (6), then
+// the prediction into it from the sample before (the same 9), which the
+// backward pass reuses instead of computing it again.
+constexpr size_t kWorkPerSample = 18;
+constexpr size_t kPredicted = 9;
 
 // Mean and covariance of one joint's x = [q, qd, qdd].
 struct Gauss {
@@ -594,8 +598,8 @@ extern "C" size_t loadid_jf_smooth_work_size(size_t count) {
 }
 
 // Forward: the filter of loadid_jf_update, x_k and P_k stored per sample.
-// Backward ([S] Theorem 8.2), k = count-2 .. 0, with the prediction
-// x-_{k+1} = F x_k, P-_{k+1} = F P_k F^T + Q recomputed:
+// Backward ([S] Theorem 8.2), k = count-2 .. 0, with the forward pass's
+// prediction x-_{k+1} = F x_k, P-_{k+1} = F P_k F^T + Q:
 //   x^s_k = x_k + G_k (x^s_{k+1} - x-_{k+1}),  G_k = P_k F^T (P-_{k+1})^-1,
 // evaluated as x_k + P_k F^T y with P-_{k+1} y = x^s_{k+1} - x-_{k+1} (no
 // inverse). A gap over max_step_us splits the series into independent
@@ -616,6 +620,7 @@ extern "C" int loadid_jf_smooth(const loadid_jf_config_t *cfg, size_t count, con
             initialise(g, q[k], *cfg);
         } else {
             predict(g, seconds(t_us[k - 1], t_us[k]), cfg->jerk_psd);
+            store(g, work + kWorkPerSample * k + kPredicted);
             correct(g, q[k], r);
         }
         store(g, work + kWorkPerSample * k);
@@ -625,9 +630,8 @@ extern "C" int loadid_jf_smooth(const loadid_jf_config_t *cfg, size_t count, con
         Real *xk = work + kWorkPerSample * k;
         const Real *xs_next = xk + kWorkPerSample; // already smoothed
         const Gauss f = load(xk);
-        Gauss p = f;
+        const Gauss p = load(xs_next + kPredicted); // x-_{k+1}, P-_{k+1}
         const Real dt = seconds(t_us[k], t_us[k + 1]), h = dt * dt / 2;
-        predict(p, dt, cfg->jerk_psd);
         const Real d[3] = {xs_next[0] - p.x[0], xs_next[1] - p.x[1], xs_next[2] - p.x[2]};
         Real y[3];
         // P- is positive definite by construction (Q(dt) is for dt > 0); the

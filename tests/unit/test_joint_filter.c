@@ -104,7 +104,7 @@ static void run_filter(const loadid_jf_config_t *cfg, const series_t *s, estimat
     loadid_jf_destroy(jf);
 }
 
-static loadid_real_t g_work[9 * N_SAMPLES];
+static loadid_real_t g_work[18 * N_SAMPLES];
 
 static void run_smoother(const loadid_jf_config_t *cfg, const series_t *s, estimate_t *e) {
     assert_true(loadid_jf_smooth_work_size((size_t)s->n) <= sizeof g_work / sizeof *g_work);
@@ -585,7 +585,7 @@ static void test_steady_sigma_is_the_models_error(void **state) {
     double dl = 0, el = 0;
     long nl = 0;
     static int64_t t[MC_STEPS];
-    static loadid_real_t z[MC_STEPS], work[9 * MC_STEPS], sq[MC_STEPS], sqd[MC_STEPS],
+    static loadid_real_t z[MC_STEPS], work[18 * MC_STEPS], sq[MC_STEPS], sqd[MC_STEPS],
         sqdd[MC_STEPS];
     static double truth[MC_STEPS][3];
     double ef[3] = {0}, es[3] = {0};
@@ -629,6 +629,7 @@ static void test_steady_sigma_is_the_models_error(void **state) {
             for (int i = 0; i < 3; ++i)
                 x[i] = nx[i] + L[i][0] * w[0] + L[i][1] * w[1] + L[i][2] * w[2];
         }
+        assert_true(loadid_jf_smooth_work_size(MC_STEPS) <= sizeof work / sizeof *work);
         assert_int_equal(loadid_jf_smooth(&cfg, MC_STEPS, t, z, work, sq, sqd, sqdd), 0);
         for (int k = 100; k < 200; ++k) {
             const double e[3] = {sq[k] - truth[k][0], sqd[k] - truth[k][1], sqdd[k] - truth[k][2]};

@@ -161,7 +161,7 @@ int loadid_jf_lagged_state_at(const loadid_jf_t *jf, int64_t t_us, int64_t max_a
                               loadid_real_t *q, loadid_real_t *qd, loadid_real_t *qdd);
 
 /* Number of reals loadid_jf_smooth needs as work space for count samples
- * (9 per sample). */
+ * (18 per sample). */
 size_t loadid_jf_smooth_work_size(size_t count);
 
 /* Fixed-interval smoother over one joint's whole series: count samples at
