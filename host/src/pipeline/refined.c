@@ -509,7 +509,7 @@ static delay_step_t delay_step(const loadid_refined_t *r, int n_params, const lo
     double var = 0;
     for (int k = 0; k < DELAY_BLOCKS; ++k) var += sq(score[k] - sum / DELAY_BLOCKS);
     out.step = sum / J;
-    for (int p = 0; p < LOADID_NPHI && p < n; ++p) out.b[p] = b[p];
+    memcpy(out.b, b, sizeof out.b); /* n is 10 or 16 */
     out.std = fmax(sqrt(var * DELAY_BLOCKS / (DELAY_BLOCKS - 1.0)) / J, sqrt(rss / dof / J));
     return out;
 }
@@ -693,14 +693,15 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
     const int64_t t_ref =
         n_params == LOADID_NPHI_OFFSET ? r->s[r->scount / 2].t : zeroed_drift_from_us;
     loadid_jf_config_t jf = r->jf;
-    bandwidth_pick_t pick = {INFINITY, (double)r->jf.jerk_psd, 0, 0};
+    bandwidth_pick_t pick = {INFINITY, 0, 0, 0};
     double band[BANDWIDTH_GRID], psd[BANDWIDTH_GRID];
     int best_trial = -1;
     for (int trial = 0; trial < BANDWIDTH_GRID; ++trial) {
+        const double least = pick.band;
         psd[trial] = (double)r->jf.jerk_psd * pow(10.0, 1 - trial);
         band[trial] =
             bandwidth_trial(r, &jf, psd[trial], n_params, zero_a, &rep->levels, t_ref, &pick);
-        if (isfinite(band[trial]) && band[trial] == pick.band) best_trial = trial;
+        if (pick.band < least) best_trial = trial;
     }
     /* Then half a decade towards the best's better neighbour: a decade
      * is coarse where blunting and the columns' noise pull phi opposite
