@@ -257,8 +257,9 @@ struct Bank {
 // The fixed-lag smoother's history: per update its time, the piece of the
 // series it belongs to (a restart after a gap begins a new one), each
 // joint's predicted state x(k|k-1) and innovation nu(k), in a ring of the
-// last kRing updates: lag + 1 are needed, the rest serves sensor samples
-// that arrive late (a CAN bus behind the joint stream).
+// last kRing updates (kept without a lag too): lag + 1 are needed, the
+// rest serves sensor samples that arrive late (a CAN bus behind the joint
+// stream), and loadid_jf_retune filters them again.
 struct LagEntry {
     int64_t t;
     int piece;
@@ -336,6 +337,39 @@ extern "C" int loadid_jf_configure(loadid_jf_t *jf, const loadid_jf_config_t *cf
     return loadid_jf_reset(jf);
 }
 
+// The current piece's kept updates filtered again with jf's gains, from
+// the prior at the oldest of them as at a restart (its entries, state and
+// settle count). A measurement is its entry's x(k|k-1) + nu(k): z itself
+// where z - x(k|k-1) was exact (Sterbenz: within a factor 2 of each
+// other), else within an ulp of it.
+static void refilter(loadid_jf_t *jf) {
+    const int count = jf->piece_entries, first = jf->ring_count - count;
+    const Real r = jf->cfg.meas_sigma * jf->cfg.meas_sigma;
+    Real z[kMaxJoints];
+    int64_t prev = 0;
+    for (int k = 0; k < count; ++k) {
+        const int slot = (jf->ring_head + first + k) % kRing;
+        LagEntry &e = jf->ring[slot];
+        for (int i = 0; i < jf->n; ++i) z[i] = e.xpred[0][i] + jf->nu[slot][i];
+        if (k == 0) {
+            for (int i = 0; i < jf->n; ++i) {
+                Gauss g;
+                initialise(g, z[i], jf->cfg);
+                jf->joints.set(i, g);
+            }
+        } else {
+            jf->joints.predict_all(jf->n, step_of(seconds(prev, e.t), jf->cfg.jerk_psd));
+        }
+        for (int c = 0; c < 3; ++c)
+            for (int i = 0; i < jf->n; ++i) e.xpred[c][i] = jf->joints.x[c][i];
+        for (int i = 0; i < jf->n; ++i) jf->nu[slot][i] = k == 0 ? Real(0) : z[i] - e.xpred[0][i];
+        if (k > 0) jf->joints.correct_all(jf->n, z, r);
+        e.seq = k;
+        prev = e.t;
+    }
+    jf->since_start = count;
+}
+
 extern "C" int loadid_jf_retune(loadid_jf_t *jf, loadid_real_t meas_sigma, int lag_steps) {
     if (!jf) return -EINVAL;
     loadid_jf_config_t c = jf->cfg;
@@ -344,6 +378,9 @@ extern "C" int loadid_jf_retune(loadid_jf_t *jf, loadid_real_t meas_sigma, int l
     if (!valid_config(&c)) return -EINVAL;
     derive(jf, &c);
     for (LagEntry &e : jf->ring) e.terms = -1; // sums of the old gains
+    // A kept state would carry the old gains' errors, far beyond its
+    // covariance, for many settle counts of the new ones (joint_filter.h).
+    if (jf->last != INT64_MIN) refilter(jf);
     return 0;
 }
 
@@ -385,7 +422,6 @@ extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real
     const bool first = jf->last == INT64_MIN;
     if (!first && t_us <= jf->last) return LOADID_E_TIME_ORDER;
     const Real r = jf->cfg.meas_sigma * jf->cfg.meas_sigma;
-    const int lag = jf->cfg.lag_steps;
     if (first || is_gap(jf->last, t_us, jf->cfg)) {
         for (int i = 0; i < jf->n; ++i) {
             Gauss g;
@@ -400,10 +436,10 @@ extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real
         jf->piece_entries = 0;
         jf->piece_start = t_us;
         jf->since_start = 0;
-        if (lag > 0) push_entry(jf, t_us, 0, nullptr);
+        push_entry(jf, t_us, 0, nullptr);
     } else {
         jf->joints.predict_all(jf->n, step_of(seconds(jf->last, t_us), jf->cfg.jerk_psd));
-        if (lag > 0) push_entry(jf, t_us, jf->since_start, q);
+        push_entry(jf, t_us, jf->since_start, q);
         jf->joints.correct_all(jf->n, q, r);
     }
     jf->last = t_us;

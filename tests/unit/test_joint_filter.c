@@ -875,14 +875,15 @@ static void test_restart_settles_before_serving(void **state) {
 
 /* loadid_jf_retune: encoders of 2^14 counts (step / sqrt(12) = 1.1e-4
  * rad) under a filter and fixed-lag smoother (20 steps) set for 2^20;
- * switched after 1 s to the coarse encoder's noise and a 60-step lag, they
- * keep their state (the same q, qd, qdd just after) and from then on follow
- * one created so: once their old errors have died out (0.3 s) they agree
- * with it far more closely than the unswitched one does (max qdd
- * difference seen 1.6e-11 rad/s^2 in double, 7.5e-3 in float, against 130
- * for the filter and 56 for the smoother left as it was), since both run
- * the same gains on the same data. The smoother serves the longer lag's
- * time from the switch on (no sum of the old gains kept). */
+ * switched after 1 s to the coarse encoder's noise and a 60-step lag, the
+ * filter runs again over the updates it kept (the last 2 MAX_LAG + 1):
+ * from there on it is one created so and first updated at the oldest of
+ * them (filter and smoother alike; seen 0 apart in double and float, the
+ * measurements rebuilt exactly), while the unswitched one is far off (max
+ * qdd difference seen 130 rad/s^2 for the filter, 56 for the smoother).
+ * With its state kept, it took 0.3 s of the new, slower gains to forget
+ * the old ones' errors, and on-line RTLS had 1.5 times the reference's
+ * inertia error on the RX60 at 2^14 counts (1.1 run again). */
 static void test_retune(void **state) {
     (void)state;
     const double coarse = 2 * PI / 16384.0;
@@ -894,14 +895,16 @@ static void test_retune(void **state) {
     assert_int_equal(loadid_jf_create(1, &fine, &sw), 0);
     assert_int_equal(loadid_jf_create(1, &big, &ref), 0);
     assert_int_equal(loadid_jf_create(1, &fine, &old), 0);
-    const int n = N_SAMPLES, cut = 1000, from = 1300;
-    double diff_sw[2] = {0, 0}, diff_old[2] = {0, 0}; /* max |qdd - ref's|: filter, smoother */
+    const int n = N_SAMPLES, cut = 1000, kept = 2 * LOADID_JF_MAX_LAG + 1;
+    const int from = cut - kept; /* ref's first update */
+    int compared[2] = {0, 0};
+    double diff[2] = {0, 0}, diff_old[2] = {0, 0}; /* max |qdd - ref's|: filter, smoother */
     for (int k = 0; k < n; ++k) {
         const int64_t t = T0 + 1000LL * k;
         const loadid_real_t z = (loadid_real_t)(round(traj(seconds_of(t), 0) / coarse) * coarse);
         if (k == cut) {
-            loadid_real_t before[3], after[3];
-            assert_int_equal(loadid_jf_state_at(sw, t, &before[0], &before[1], &before[2]), 0);
+            const int64_t tp = t - 1000;
+            loadid_real_t x[2][3];
             const loadid_real_t bad[4] = {0, -1, (loadid_real_t)NAN, (loadid_real_t)INFINITY};
             for (int b = 0; b < 4; ++b) assert_int_equal(loadid_jf_retune(sw, bad[b], 60), -EINVAL);
             assert_int_equal(loadid_jf_retune(sw, big.meas_sigma, -1), -EINVAL);
@@ -912,32 +915,43 @@ static void test_retune(void **state) {
             assert_int_equal(loadid_jf_retune(sw, big.meas_sigma, 60), 0);
             assert_int_equal(loadid_jf_settle_steps(sw), loadid_jf_settle_steps(ref));
             assert_int_equal(loadid_jf_lagged_time(sw), t - 1000LL * 60 - 1);
-            assert_true(loadid_jf_settled(sw));
-            assert_int_equal(loadid_jf_state_at(sw, t, &after[0], &after[1], &after[2]), 0);
-            for (int c = 0; c < 3; ++c) assert_true(before[c] == after[c]);
+            assert_int_equal(loadid_jf_lagged_time(sw), loadid_jf_lagged_time(ref));
+            assert_true(loadid_jf_settled(sw) && loadid_jf_settled(ref));
+            assert_int_equal(loadid_jf_state_at(sw, tp, &x[0][0], &x[0][1], &x[0][2]), 0);
+            assert_int_equal(loadid_jf_state_at(ref, tp, &x[1][0], &x[1][1], &x[1][2]), 0);
+            for (int c = 0; c < 3; ++c) diff[0] = fmax(diff[0], fabs(x[0][c] - x[1][c]));
         }
         loadid_jf_t *jf[3] = {sw, ref, old};
         loadid_real_t qdd[3], lagged[3];
+        int rc[3];
         for (int f = 0; f < 3; ++f) {
+            if (f == 1 && k < from) continue;
             assert_int_equal(loadid_jf_update(jf[f], t, &z), 0);
             assert_int_equal(loadid_jf_state_at(jf[f], t, NULL, NULL, &qdd[f]), 0);
         }
-        const int64_t tl = t - 1000LL * big.lag_steps;
-        if (k < from) continue;
-        for (int f = 0; f < 3; ++f)
-            assert_int_equal(loadid_jf_lagged_state_at(jf[f], tl, 5000, NULL, NULL, &lagged[f]), 0);
-        diff_sw[0] = fmax(diff_sw[0], fabs(qdd[0] - qdd[1]));
+        if (k < cut) continue;
+        ++compared[0];
+        diff[0] = fmax(diff[0], fabs(qdd[0] - qdd[1]));
         diff_old[0] = fmax(diff_old[0], fabs(qdd[2] - qdd[1]));
-        diff_sw[1] = fmax(diff_sw[1], fabs(lagged[0] - lagged[1]));
+        /* From 60 steps before the switch: served from the updates run again. */
+        const int64_t tl = t - 1000LL * 2 * big.lag_steps;
+        for (int f = 0; f < 3; ++f)
+            rc[f] = loadid_jf_lagged_state_at(jf[f], tl, 5000, NULL, NULL, &lagged[f]);
+        assert_int_equal(rc[0], 0);
+        assert_int_equal(rc[1], 0);
+        assert_int_equal(rc[2], 0);
+        ++compared[1];
+        diff[1] = fmax(diff[1], fabs(lagged[0] - lagged[1]));
         diff_old[1] = fmax(diff_old[1], fabs(lagged[2] - lagged[1]));
     }
     print_message(
-        "after the switch, max |qdd - the coarse-tuned one's| [rad/s^2]: filter %.3g "
-        "(unswitched %.3g), smoother %.3g (unswitched %.3g)\n",
-        diff_sw[0], diff_old[0], diff_sw[1], diff_old[1]);
+        "after the switch (%d filter states, %d smoothed), max |qdd - the coarse-tuned one's| "
+        "[rad/s^2]: filter %.3g (unswitched %.3g), smoother %.3g (unswitched %.3g)\n",
+        compared[0], compared[1], diff[0], diff_old[0], diff[1], diff_old[1]);
+    assert_int_equal(compared[0], n - cut);
     for (int i = 0; i < 2; ++i) {
         assert_true(diff_old[i] > 1.0);
-        assert_true(diff_sw[i] < 1e-3 * diff_old[i]);
+        assert_true(diff[i] < 1e-6 * diff_old[i]);
     }
     loadid_jf_destroy(sw);
     loadid_jf_destroy(ref);

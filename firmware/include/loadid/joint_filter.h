@@ -87,11 +87,15 @@ void loadid_jf_destroy(loadid_jf_t *jf);
 int loadid_jf_configure(loadid_jf_t *jf, const loadid_jf_config_t *cfg);
 
 /* Another measurement noise (the positions measured noisier than
- * configured) and fixed lag, from the next update on: the gains and settle
- * count derived again, the filters' states and the smoother's updates kept
- * (their next settle updates blend the old gains' errors out; a longer lag
- * serves later). Allocates nothing. Returns 0 or -EINVAL (NULL, a
- * meas_sigma or lag_steps create would refuse; jf then unchanged). */
+ * configured) and fixed lag: the gains and settle count derived again, and
+ * the current piece's kept updates (the last 2 LOADID_JF_MAX_LAG + 1)
+ * filtered again with them, from the prior at the oldest as at a restart:
+ * the state and the smoother's history are then the ones a filter so
+ * tuned would have from there (settled when more than settle updates were
+ * kept). Kept as they were, the state would carry the old gains' errors,
+ * far beyond its covariance, for many settle counts of the new gains.
+ * Allocates nothing. Returns 0 or -EINVAL (NULL, a meas_sigma or
+ * lag_steps create would refuse; jf then unchanged). */
 int loadid_jf_retune(loadid_jf_t *jf, loadid_real_t meas_sigma, int lag_steps);
 
 /* Forgets every measurement. Returns 0 or -EINVAL. */

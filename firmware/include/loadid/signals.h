@@ -158,11 +158,11 @@ int64_t loadid_signals_position_noise_count(const loadid_signals_t *s);
 /* The measured positions' filter bank for encoders noisier than its
  * meas_sigma, with the fixed-lag smoother's lag lag_us (in joint periods,
  * never shorter than it is, at most LOADID_JF_MAX_LAG; a bank without the
- * smoother keeps none): loadid_jf_retune, states kept, gains from the next
- * joint state on. The setpoints' bank is left alone (commanded positions
- * carry no encoder noise). Returns the joint states the filters take to
- * settle on it (loadid_jf_settle_steps), or -EINVAL (also while the
- * period is being probed). */
+ * smoother keeps none): loadid_jf_retune, the joint states the bank kept
+ * filtered again with the new gains. The setpoints' bank is left alone
+ * (commanded positions carry no encoder noise). Returns the filters'
+ * settle count for the new gains (loadid_jf_settle_steps), or -EINVAL
+ * (also while the period is being probed). */
 int loadid_signals_retune(loadid_signals_t *s, double meas_sigma, int64_t lag_us);
 
 /* The measured positions' filter bank's configuration as it runs now (after
