@@ -443,11 +443,12 @@ def test_coarse_encoders_retune_the_joint_filters(trajectory, tmp_path, seed):
     positions' fourth differences measure step / sqrt(12) = 1.11e-4 rad
     (the largest joint's; seen 1.17e-4). Early in the window the log says
     how much noisier, the filters take the measured noise (seen 1.53e-4 from
-    the first 32 differences), the fixed-lag smoother a longer lag, and the
-    on-line estimators start again once they have settled on it: every
-    method claims the mass and is within 3 phi_std of it (seen RTLS 0.24
-    and 0.39 % off at 0.28 and 0.27 %; with the filters left at 2^20 it was
-    14 % off at 2.7 %). With
+    the first 32 differences) and run again over the joint states they kept,
+    the fixed-lag smoother a longer lag, and the on-line estimators start
+    again: every method claims the mass and is within 3 phi_std of it (seen
+    RTLS 0.12 and 0.04 % off at 0.20 and 0.23 %; 0.24 and 0.39 % with the
+    filters' state kept through the retune; with the filters left at 2^20
+    it was 14 % off at 2.7 %). With
     kalman.meas_sigma configured at that default the filters keep it, and
     at DONE the log warns and gives the value that fits: RLS, RTLS and
     TLS_BATCH, whose a - g, omega and alpha carried that noise uncounted,

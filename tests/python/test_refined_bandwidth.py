@@ -15,46 +15,9 @@ decade beside the best it takes 3.2 in three of the four, 0.67-1.16
 
 from __future__ import annotations
 
-import json
-import os
-import pathlib
-import sys
-
 import numpy as np
 
-from recordings import program, run_tool
-
-STUDY = pathlib.Path(__file__).resolve().parents[2] / "tools" / "study"
-sys.path.insert(0, str(STUDY))
-import loadid_study as st  # noqa: E402
-
-
-def run_cell(tmp_path, robot, load, seeds, cell="paper_enc14"):
-    """Recordings of the study's cell through its own run_recording
-    (simulation, loadidd --offline, the reference), on its trajectory
-    design: per seed the study's rows by method and REFINED's result."""
-    build = pathlib.Path(os.environ["LOADIDD_EXE"]).resolve().parents[1]
-    traj_cfg = tmp_path / "traj-config.yaml"
-    traj_cfg.write_text(st.robot_yaml(robot))
-    traj = tmp_path / "traj.yaml"
-    run_tool([program("LOADID_TRAJ_EXE"), "--config", traj_cfg, *st.TRAJ_BUDGET, "--quiet",
-              "--out", traj])
-    sim_cfg, est_cfg = tmp_path / "sim.yaml", tmp_path / "est.yaml"
-    sim_cfg.write_text(st.sim_config(robot, load, cell))
-    est_cfg.write_text(st.est_config(robot, cell, ["REFINED"]))
-    out = []
-    for seed in seeds:
-        name = f"{robot}-{load}-s{seed}"
-        rows = st.run_recording(dict(
-            build=str(build), workdir=str(tmp_path), rec_name=name, robot=robot, load=load,
-            seed=seed, sim_seed=st.sim_seed(robot, load, cell, seed), sim_config=sim_cfg,
-            trajectory=traj, cells=[dict(noise=cell, est_config=est_cfg)],
-            methods=["REFINED"], keep=False))
-        err = {r["method"]: r for r in rows}
-        assert err["REFINED"]["ok"] and err["REF"]["ok"], rows
-        (refined,) = json.loads((tmp_path / "results" / f"{name}-{cell}.json").read_text())
-        out.append((err, refined))
-    return out
+from study_cell import run_cell, st
 
 
 def test_refined_bandwidth_under_coarse_encoders_matches_the_reference(tmp_path):

@@ -95,7 +95,6 @@ struct loadid_pipeline {
     double noise_corr[2];   /* the zeroing window's (set_zeroing_noise) */
     double joint_over;      /* levels.joint_position over kalman.meas_sigma; 0 within tolerance */
     int64_t stamp_restarts; /* check_joint_stamps: the window's, when they void phi_std; else 0 */
-    int64_t feed_from_us;   /* rows before it wait for the joint filters (retune_joint_filters) */
     double tone_share[2], tone_hz[2]; /* a - g, alpha (measure_tones) */
     /* the notch on the rows against those tones (notch.h; no stages: none),
      * its frequencies per column group (0: none) and the still window's
@@ -1128,10 +1127,13 @@ static void note_joint_period(loadid_pipeline_t *p) {
  * differences since START) against what the measured-position filters
  * assume: over JOINT_RETUNE_FACTOR times (a coarser encoder than
  * kalman.meas_sigma's default of 2^20 counts) and with kalman.meas_sigma
- * auto, the filters take the measured noise from the next joint state on,
- * the on-line estimators start again with rows from once the filters have
- * settled on it, and their weights take the filters' new levels. The
- * smoother's bandwidth falls as the noise's cube root, its time constant
+ * auto, the filters take the measured noise, run again over the joint
+ * states they kept (loadid_jf_retune: the last 0.4 s at 1 kHz), and the
+ * on-line estimators start again from the next sample, their weights the
+ * filters' new levels. Their state kept instead, the filters carried the
+ * old gains' noise for some 0.3 s: RTLS's inertia error 1.7 times REF's on
+ * the RX60 with the hollow load at 2^14 counts (20 seeds), 1.0 run again.
+ * The smoother's bandwidth falls as the noise's cube root, its time constant
  * grows so, and so does its lag (to at most JOINT_RETUNE_MAX_LAG_S): on the
  * RX60 with 2^14 counts (88 times) RTLS was 14 % off in mass with the
  * filters left at 2^20 (refused at DONE, check_joint_noise); retuned with
@@ -1171,22 +1173,22 @@ static void retune_joint_filters(loadid_pipeline_t *p) {
     if (!(over > JOINT_RETUNE_FACTOR)) return;
     double lag_us = (double)c.lag_steps * (double)c.nominal_step_us * cbrt(over);
     if (lag_us > JOINT_RETUNE_MAX_LAG_S * 1e6) lag_us = JOINT_RETUNE_MAX_LAG_S * 1e6;
-    const int settle = loadid_signals_retune(p->sig, measured, llround(lag_us));
-    if (settle < 0 || loadid_signals_filter_config(p->sig, &n) != 0) return;
+    if (loadid_signals_retune(p->sig, measured, llround(lag_us)) < 0 ||
+        loadid_signals_filter_config(p->sig, &n) != 0)
+        return;
     restart_rows(p);
-    p->feed_from_us = now + settle * c.nominal_step_us;
     filter_noise(p);
     apply_measured_noise(p);
     reset_drift(p);
     note(p,
          "joints: their positions are %.3g times noisier than the joint filters assumed (%.3g "
          "against %.3g, from %lld fourth differences since START; a coarser encoder): the "
-         "filters take %.3g from here on (kalman.meas_sigma auto), the fixed-lag smoother %d "
-         "steps (was %d), and the on-line estimators start again from %.3f s after START, once "
-         "the filters have settled on it",
+         "filters take %.3g from here on (kalman.meas_sigma auto) and run again over the joint "
+         "states they kept, the fixed-lag smoother %d steps (was %d), and the on-line estimators "
+         "start again from the next sample",
          over, measured, (double)c.meas_sigma,
-         (long long)loadid_signals_position_noise_count(p->sig), measured, n.lag_steps, c.lag_steps,
-         (double)(p->feed_from_us - p->start_us) / 1e6);
+         (long long)loadid_signals_position_noise_count(p->sig), measured, n.lag_steps,
+         c.lag_steps);
 }
 
 void loadid_pipeline_joint_state(loadid_pipeline_t *p, int64_t utime, int num_joints,
@@ -1253,7 +1255,6 @@ static void restart_rows(loadid_pipeline_t *p) {
     p->have_row = 0;
     p->primary = -1;
     p->drift_significant = 0;
-    p->feed_from_us = INT64_MIN;
     loadid_spectrum_rows_reset(p->rows);
     loadid_notch_bank_restart(&p->notch);
 }
@@ -1607,7 +1608,6 @@ static void on_sample(loadid_pipeline_t *p, const loadid_sensor_sample_t *s) {
     /* REFINED pairs the wrench with its own smoothed kinematics, and the
      * trace the wrench with the motion: both take it as measured. */
     if (p->refined) loadid_refined_sample(p->refined, s->t_us, y, lin, ang);
-    if (s->t_us < p->feed_from_us) return; /* the joint filters settling (retune_joint_filters) */
     if (p->trace_rows) memcpy(p->row_y, y, sizeof p->row_y);
     if (p->notch.stages > 0) { /* the same filter on both sides: A phi = y still */
         loadid_notch_bank_apply(&p->notch, LOADID_NOTCH_A, 6 * p->n_params, A);
