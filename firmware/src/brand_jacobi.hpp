@@ -1,14 +1,15 @@
 // The SVD inside Brand's update once M has full rank: Z = [S_k L_k] of
-// eq. (29), S_k diagonal (N1 x N1), L_k = U^T N_k (N1 x C, C = 6 per
-// sample: C > 6 when several samples' blocks N_k are taken at once, as
-// Brand's update allows). Only its left singular vectors and values are
-// needed (eq. 30).
+// eq. (29), S_k diagonal (N1 x N1) with every s_i > 0, L_k = U^T N_k
+// (N1 x C, C = 6 per sample: C > 6 when several samples' blocks N_k are
+// taken at once, as Brand's update allows). Only its left singular vectors
+// and values are needed (eq. 30).
 //
 // One-sided (Hestenes) Jacobi on X = Z^T, as linalg::svd_left, using Z's
-// shape: after rotations V, X V = [S V; L^T V], so the upper block is
-// never stored, only V, whose columns are the left singular vectors at the
-// end. A column of the work matrix is [V(:, j); (L^T V)(:, j); 0], and the
-// dot products of X's columns weigh its first N1 entries by s_i^2.
+// shape: after rotations V, X V = [S V; L^T V], whose upper block gives V
+// back as S^-1 (S V) at the end, row by row (the rotations mix columns, so
+// each row keeps its own relative accuracy). A column of the work matrix
+// is [(S V)(:, j); (L^T V)(:, j); 0]. (Keeping V itself instead, the dot
+// products had to weigh its rows by s_i^2: 2 % more per sample.)
 //
 // The pairs come in round-robin order (Brent & Luk 1985): each round's
 // pairs are disjoint, so their dot products, rotation angles (divisions and
@@ -67,12 +68,12 @@ constexpr bool round_robin_is_complete() {
 }
 
 // U (N1 x N1) and sv (descending): the left singular vectors and values of
-// [diag(s) L]. Zero columns of L change nothing.
+// [diag(s) L], every s_i > 0 (M of full rank: Brand's update never lowers
+// a singular value). Zero columns of L change nothing.
 template <int N1, int C>
 void brand_jacobi(const Vec<N1> &s, const Eigen::Matrix<Real, N1, C> &L,
                   Eigen::Matrix<Real, N1, N1> &U, Vec<N1> &sv) {
     constexpr int kRows = (N1 + C + 1) / 2 * 2; // even: whole SSE packets
-    using Col = Eigen::Matrix<Real, kRows, 1>;
     using Sched = RoundRobin<N1>;
     constexpr int K = Sched::kPairs;
     using Arr = Eigen::Array<Real, K, 1>;
@@ -80,15 +81,11 @@ void brand_jacobi(const Vec<N1> &s, const Eigen::Matrix<Real, N1, C> &L,
     static_assert(round_robin_is_complete<N1>(), "round-robin schedule");
 
     Eigen::Matrix<Real, kRows, N1> X = Eigen::Matrix<Real, kRows, N1>::Zero();
-    X.template topRows<N1>().setIdentity();
+    X.template topRows<N1>().diagonal() = s;
     X.template middleRows<C>(N1) = L.transpose();
-    Col w = Col::Zero();
-    w.template head<N1>() = s.cwiseAbs2();
-    w.template segment<C>(N1).setOnes();
-    const auto weighted_norm2 = [&](int j) { return w.dot(X.col(j).cwiseAbs2()); };
 
     Vec<N1> norm2;
-    for (int j = 0; j < N1; ++j) norm2(j) = weighted_norm2(j);
+    for (int j = 0; j < N1; ++j) norm2(j) = X.col(j).squaredNorm();
     // As svd_left: pairs closer to orthogonal than eps are left; a sweep
     // whose rotations all had |t| <= sqrt(eps / 4n) leaves off-diagonal
     // terms of order eps (quadratic convergence), so the next would rotate
@@ -104,7 +101,7 @@ void brand_jacobi(const Vec<N1> &s, const Eigen::Matrix<Real, N1, C> &L,
                 const int p = sched.p[r][k], q = sched.q[r][k];
                 a(k) = norm2(p);
                 b(k) = q >= 0 ? norm2(q) : Real(0);
-                g(k) = q >= 0 ? w.cwiseProduct(X.col(p)).dot(X.col(q)) : Real(0);
+                g(k) = q >= 0 ? X.col(p).dot(X.col(q)) : Real(0);
             }
             const auto on = (a > 0) && (b > 0) && (g.abs() > tol * (a * b).sqrt());
             // The rotation that zeroes the (p, q) element of X^T X.
@@ -132,10 +129,10 @@ void brand_jacobi(const Vec<N1> &s, const Eigen::Matrix<Real, N1, C> &L,
             }
         }
         if (!rotated || t_max <= tiny) break;
-        for (int j = 0; j < N1; ++j) norm2(j) = weighted_norm2(j); // refresh the running norms
+        for (int j = 0; j < N1; ++j) norm2(j) = X.col(j).squaredNorm(); // refresh the running norms
     }
-    for (int j = 0; j < N1; ++j) sv(j) = std::sqrt(weighted_norm2(j));
-    U = X.template topRows<N1>();
+    for (int j = 0; j < N1; ++j) sv(j) = X.col(j).norm();
+    U = s.cwiseInverse().asDiagonal() * X.template topRows<N1>();
     linalg::sort_descending(U, sv, N1);
 }
 

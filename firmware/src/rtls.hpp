@@ -89,6 +89,12 @@ class Rtls final : public loadid_est {
             U_.col(j) = V.col(N - j);
             s_(j) = std::sqrt(std::max(l(N - j), Real(0)));
         }
+        // A direction the re-weighting left (numerically) empty: rank
+        // deficient, as initial_svd keeps it (brand_jacobi wants s > 0).
+        const Real tol = rank_tol(s_(0));
+        while (rank_ > 0 && !(s_(rank_ - 1) > tol)) --rank_;
+        U_.rightCols(N1 - rank_).setZero();
+        s_.tail(N1 - rank_).setZero();
         since_check_ = 0;
         ortho_error_ = orthogonality_error();
         return 0;
