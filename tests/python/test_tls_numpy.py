@@ -229,11 +229,18 @@ def assert_close_params(phi, ref, rtol, what):
     return worst
 
 
+# The condition number's own accuracy: its extreme eigenvalues are Rayleigh
+# quotients of vectors warm from the last call, with residuals up to 1e-3
+# (excitation.hpp); seen 6e-6 at worst here (1e-8 typically), 2.5e-5 in
+# test_estimators.
+KAPPA_RTOL = 1e-4
+
+
 def assert_condition(info_kappa, cfg, As, what, forgetting=1.0):
     ref = numpy_cond(cfg, As, forgetting)
     # The library forms kappa from the eigenvalues of the Gram matrix
     # (D A T1)^T (D A T1), which costs relative accuracy ~ eps kappa^2.
-    rtol = 1e-10 + 10 * EPS * ref * ref
+    rtol = KAPPA_RTOL + 10 * EPS * ref * ref
     assert info_kappa == pytest.approx(ref, rel=rtol), f"{what}: condition number"
     return abs(info_kappa / ref - 1)
 
@@ -587,7 +594,7 @@ def test_gate_follows_numpy_at_every_sample_count(method, n_params, forgetting):
                 # Skip the (here absent) samples where numpy's figures lie
                 # within the library's accuracy of a threshold.
                 r_tol = 10 * noise_ratio_rtol(spread)
-                k_tol = 10 * (1e-10 + 10 * EPS * kappa * kappa)
+                k_tol = 10 * (KAPPA_RTOL + 10 * EPS * kappa * kappa)
                 if abs(kappa / cfg.max_condition - 1) <= k_tol or \
                         (cfg.max_noise_ratio < 1 and abs(ratio / bound - 1) <= r_tol):
                     continue

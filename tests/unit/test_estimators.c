@@ -703,10 +703,11 @@ static void jacobi_eigenvalues(double *a, int n, double *lambda) {
  * T1)^T (D A_k T1), accumulated here and solved by Jacobi: the core starts
  * each call from the last one's eigenvectors, and that must not cost
  * accuracy. Halfway, the data jump (rows scaled by 30, as a collision
- * would), which the warm start must survive. Bound 5e-11 relative: the
- * residual test puts each Rayleigh quotient within 1e-12 rho / gap
- * (excitation.hpp); observed 1.7e-11, in the first 150 samples, where
- * Upsilon's small eigenvalues lie close together. */
+ * would), which the warm start must survive. Bound 1e-4 relative: the
+ * residual test puts each Rayleigh quotient within 1e-6 rho / gap
+ * (excitation.hpp); observed 2.5e-5, early on, where Upsilon's small
+ * eigenvalues lie close together (1.7e-11 with the residual at 1e-6, whose
+ * inverse-iteration steps cost 0.8 us an estimate). */
 static void test_condition_number_every_update(void **state) {
     (void)state;
     const dataset_spec_t spec = {.seed = 5, .n_samples = 1500, .n_params = 10, .noise = kNoiseBoth};
@@ -754,7 +755,7 @@ static void test_condition_number_every_update(void **state) {
         print_message("%s: condition number after each of %d updates, worst rel diff %.2e\n",
                       loadid_method_name(methods[m]), compared, worst);
         assert_true(compared > 1000);
-        assert_true(worst < 5e-11);
+        assert_true(worst < 1e-4);
         loadid_est_destroy(e);
     }
     dataset_free(&d);
