@@ -337,33 +337,72 @@ extern "C" int loadid_jf_configure(loadid_jf_t *jf, const loadid_jf_config_t *cf
     return loadid_jf_reset(jf);
 }
 
+extern "C" void loadid_jf_destroy(loadid_jf_t *jf) {
+    delete jf;
+}
+
+extern "C" int loadid_jf_reset(loadid_jf_t *jf) {
+    if (!jf) return -EINVAL;
+    jf->last = INT64_MIN;
+    jf->ring_head = jf->ring_count = 0;
+    jf->piece = jf->piece_entries = jf->since_start = 0;
+    return 0;
+}
+
+// A new entry of the current piece at the ring's end (the ring keeps the
+// last kRing updates); returns its slot.
+static int push_entry(loadid_jf_t *jf, int64_t t_us, int seq) {
+    if (jf->ring_count == kRing)
+        jf->ring_head = (jf->ring_head + 1) % kRing;
+    else
+        ++jf->ring_count;
+    const int slot = (jf->ring_head + jf->ring_count - 1) % kRing;
+    LagEntry *e = &jf->ring[slot];
+    e->t = t_us;
+    e->piece = jf->piece;
+    e->seq = seq;
+    e->terms = -1;
+    jf->piece_entries = std::min(jf->piece_entries + 1, jf->ring_count);
+    return slot;
+}
+
+// One update of every joint with the measurements z, kept in ring slot
+// slot: the first of a (re)start initialises from z, another predicts over
+// dt [s] and corrects; the entry keeps x(k|k-1) and the innovations
+// z - x(k|k-1) (0 for a first update).
+static void filter_into(loadid_jf_t *jf, int slot, bool first, Real dt, const Real *z) {
+    if (first) {
+        for (int i = 0; i < jf->n; ++i) {
+            Gauss g;
+            initialise(g, z[i], jf->cfg);
+            jf->joints.set(i, g);
+        }
+    } else {
+        jf->joints.predict_all(jf->n, step_of(dt, jf->cfg.jerk_psd));
+    }
+    LagEntry &e = jf->ring[slot];
+    for (int c = 0; c < 3; ++c)
+        for (int i = 0; i < jf->n; ++i) e.xpred[c][i] = jf->joints.x[c][i];
+    for (int i = 0; i < jf->n; ++i) jf->nu[slot][i] = first ? Real(0) : z[i] - jf->joints.x[0][i];
+    if (!first) jf->joints.correct_all(jf->n, z, jf->cfg.meas_sigma * jf->cfg.meas_sigma);
+}
+
 // The current piece's kept updates filtered again with jf's gains, from
 // the prior at the oldest of them as at a restart (its entries, state and
 // settle count). A measurement is its entry's x(k|k-1) + nu(k): z itself
 // where z - x(k|k-1) was exact (Sterbenz: within a factor 2 of each
-// other), else within an ulp of it.
+// other), else within an ulp of it. With none kept since the piece began
+// (loadid_jf_end_piece just before), the state stays, counted as not
+// settled.
 static void refilter(loadid_jf_t *jf) {
     const int count = jf->piece_entries, first = jf->ring_count - count;
-    const Real r = jf->cfg.meas_sigma * jf->cfg.meas_sigma;
     Real z[kMaxJoints];
     int64_t prev = 0;
     for (int k = 0; k < count; ++k) {
         const int slot = (jf->ring_head + first + k) % kRing;
         LagEntry &e = jf->ring[slot];
         for (int i = 0; i < jf->n; ++i) z[i] = e.xpred[0][i] + jf->nu[slot][i];
-        if (k == 0) {
-            for (int i = 0; i < jf->n; ++i) {
-                Gauss g;
-                initialise(g, z[i], jf->cfg);
-                jf->joints.set(i, g);
-            }
-        } else {
-            jf->joints.predict_all(jf->n, step_of(seconds(prev, e.t), jf->cfg.jerk_psd));
-        }
-        for (int c = 0; c < 3; ++c)
-            for (int i = 0; i < jf->n; ++i) e.xpred[c][i] = jf->joints.x[c][i];
-        for (int i = 0; i < jf->n; ++i) jf->nu[slot][i] = k == 0 ? Real(0) : z[i] - e.xpred[0][i];
-        if (k > 0) jf->joints.correct_all(jf->n, z, r);
+        filter_into(jf, slot, k == 0, k == 0 ? Real(0) : seconds(prev, e.t), z);
         e.seq = k;
         prev = e.t;
     }
@@ -384,50 +423,13 @@ extern "C" int loadid_jf_retune(loadid_jf_t *jf, loadid_real_t meas_sigma, int l
     return 0;
 }
 
-extern "C" void loadid_jf_destroy(loadid_jf_t *jf) {
-    delete jf;
-}
-
-extern "C" int loadid_jf_reset(loadid_jf_t *jf) {
-    if (!jf) return -EINVAL;
-    jf->last = INT64_MIN;
-    jf->ring_head = jf->ring_count = 0;
-    jf->piece = jf->piece_entries = jf->since_start = 0;
-    return 0;
-}
-
-// A new entry of the current piece at the ring's end (the ring keeps the
-// last kRing updates), its predicted state the filters' now and its
-// innovations z - x(k|k-1) (0 for a first update).
-static void push_entry(loadid_jf_t *jf, int64_t t_us, int seq, const Real *z) {
-    if (jf->ring_count == kRing)
-        jf->ring_head = (jf->ring_head + 1) % kRing;
-    else
-        ++jf->ring_count;
-    const int slot = (jf->ring_head + jf->ring_count - 1) % kRing;
-    LagEntry *e = &jf->ring[slot];
-    e->t = t_us;
-    e->piece = jf->piece;
-    e->seq = seq;
-    e->terms = -1;
-    for (int c = 0; c < 3; ++c)
-        for (int i = 0; i < jf->n; ++i) e->xpred[c][i] = jf->joints.x[c][i];
-    for (int i = 0; i < jf->n; ++i) jf->nu[slot][i] = z ? z[i] - jf->joints.x[0][i] : Real(0);
-    jf->piece_entries = std::min(jf->piece_entries + 1, jf->ring_count);
-}
-
 extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real_t *q) {
     if (!jf || !q) return -EINVAL;
     if (!loadid::all_finite(q, jf->n)) return LOADID_E_NONFINITE;
     const bool first = jf->last == INT64_MIN;
     if (!first && t_us <= jf->last) return LOADID_E_TIME_ORDER;
-    const Real r = jf->cfg.meas_sigma * jf->cfg.meas_sigma;
-    if (first || is_gap(jf->last, t_us, jf->cfg)) {
-        for (int i = 0; i < jf->n; ++i) {
-            Gauss g;
-            initialise(g, q[i], jf->cfg);
-            jf->joints.set(i, g);
-        }
+    const bool restart = first || is_gap(jf->last, t_us, jf->cfg);
+    if (restart) {
         // The smoother restarts with the filter; the last piece's updates
         // stay (smoothed with what came after them in it) until pushed out.
         // The first update is an entry too (its state, no innovation), so
@@ -436,12 +438,9 @@ extern "C" int loadid_jf_update(loadid_jf_t *jf, int64_t t_us, const loadid_real
         jf->piece_entries = 0;
         jf->piece_start = t_us;
         jf->since_start = 0;
-        push_entry(jf, t_us, 0, nullptr);
-    } else {
-        jf->joints.predict_all(jf->n, step_of(seconds(jf->last, t_us), jf->cfg.jerk_psd));
-        push_entry(jf, t_us, jf->since_start, q);
-        jf->joints.correct_all(jf->n, q, r);
     }
+    const int slot = push_entry(jf, t_us, jf->since_start);
+    filter_into(jf, slot, restart, restart ? Real(0) : seconds(jf->last, t_us), q);
     jf->last = t_us;
     if (jf->since_start < INT32_MAX) ++jf->since_start;
     return 0;
