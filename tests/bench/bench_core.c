@@ -477,6 +477,8 @@ static void print_machine(int reps, int samples, const stats_t *tov, const stats
     printf("%s: loadid core latency (RTLS after Kubus, Kroeger, Wahl, IROS 2008)\n", prog);
     printf("  scalar     %s (loadid_real_t, %zu bytes)\n",
            loadid_scalar_is_float() ? "float" : "double", sizeof(loadid_real_t));
+    printf("  kernel     RTLS's Jacobi on %s (LOADID_JACOBI_KERNEL=portable forces portable)\n",
+           loadid_jacobi_kernel());
     printf("  machine    %ld CPUs online (%ld configured)", ncpu_onln, ncpu_conf);
     if (have_uname) printf(", %s %s %s", u.sysname, u.release, u.machine);
     printf("\n");

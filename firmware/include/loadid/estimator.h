@@ -388,6 +388,12 @@ const loadid_est_config_t *loadid_est_config(const loadid_est_t *est);
 const char *loadid_method_name(loadid_method_t method);
 int loadid_method_from_name(const char *name);
 
+/* The kernel RTLS's SVD update runs on: "avx2+fma" (x86-64 CPUs that have
+ * them, double build) or "portable"; chosen once at start-up. The
+ * environment variable LOADID_JACOBI_KERNEL=portable forces the latter
+ * (for tests and comparisons); the two agree to rounding. */
+const char *loadid_jacobi_kernel(void);
+
 #ifdef __cplusplus
 }
 #endif
