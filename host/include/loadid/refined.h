@@ -80,7 +80,8 @@ typedef struct {
     int joint_delay_used;         /* REFINED took its kinematics that much later
                                   (a delay of 1 ms or more, at least 3 standard
                                   errors, that lowers the residual) */
-    double delay_var[10];         /* what fitting a used delay adds to phi's variance */
+    double delay_var[10];         /* what the delay adds to phi's variance: fitting a
+                                  used one, or one not told from 0 left out */
     int drift_fitted;             /* the offset's linear drift was fitted (refined_run) */
     double drift[6];              /* [N/s, N m/s], taken out of the wrench fed */
     double drift_var[10];         /* what estimating it adds to phi's variance */
