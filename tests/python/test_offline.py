@@ -1190,6 +1190,23 @@ def test_joint_delay_standard_error_matches_its_error_over_seeds(trajectory, tmp
     assert all(abs(d) < 3 * s for d, s in zip(delays, stds)), (delays, stds)
 
 
+def slow_ur5_draws(tmp_path, seeds=range(100, 140)):
+    """The UR5's slow trajectory of the real-data-like case's seed 7 and a
+    REFINED configuration for it (offset estimated): yields (config,
+    recording) for each noise draw of seeds, the recording removed after."""
+    ur5 = f"robot:\n  urdf: {UR5}\n"
+    first = tmp_path / "seed7"
+    first.mkdir()
+    real_data_like(first, ur5, 7)
+    cfg = write_config(tmp_path / "c.yaml", ur5 + SLOW + "estimation:\n  offset_model: estimate\n"
+                       "  methods: [REFINED]\n")
+    for seed in seeds:
+        rec = simulate(tmp_path / f"s{seed}", first / "traj", "--config", first / "sim.yaml",
+                       "--seed", str(seed))
+        yield cfg, rec
+        shutil.rmtree(rec)
+
+
 def test_slow_motion_joint_delay_standard_error_matches_its_error_over_seeds(tmp_path):
     """The UR5's slow trajectory of the real-data-like case's seed 7 (1.5 s
     of |omega| 0.37 rad/s RMS), forty noise draws, no delay simulated. The
@@ -1201,21 +1218,12 @@ def test_slow_motion_joint_delay_standard_error_matches_its_error_over_seeds(tmp
     draws: RMS of delay / std 1.34, none used (1.49 with c differenced
     over one sample; the scores alone: three used and failed here; white
     force noise alone gave 1.28)."""
-    ur5 = f"robot:\n  urdf: {UR5}\n"
-    first = tmp_path / "seed7"
-    first.mkdir()
-    real_data_like(first, ur5, 7)
-    cfg = write_config(tmp_path / "c.yaml", ur5 + SLOW + "estimation:\n  offset_model: estimate\n"
-                       "  methods: [REFINED]\n")
     z, used = [], 0
-    for seed in range(100, 140):
-        rec = simulate(tmp_path / f"s{seed}", first / "traj", "--config", first / "sim.yaml",
-                       "--seed", str(seed))
+    for cfg, rec in slow_ur5_draws(tmp_path):
         (refined,), _ = offline(cfg, rec)
         fit = refined["refined"]
         z.append(fit["joint_delay_s"] / fit["joint_delay_std_s"])
         used += fit["joint_delay_used"]
-        shutil.rmtree(rec)
     print("delay / std", np.round(z, 2).tolist())
     assert np.sqrt(np.mean(np.square(z))) < 1.7 and used <= 2, (z, used)
 
@@ -1230,24 +1238,15 @@ def test_slow_motion_joint_delay_left_out_widens_phi_std(tmp_path, lcmtypes):
     counted), RMS of error / phi_std 1.20 (1.90). The delay's own fit is
     1.33 of its standard error in RMS (2.89 with c differenced over one
     sample: the fits fell short where the joints were least smoothed)."""
-    ur5 = f"robot:\n  urdf: {UR5}\n"
-    first = tmp_path / "seed7"
-    first.mkdir()
-    real_data_like(first, ur5, 7)
-    cfg = write_config(tmp_path / "c.yaml", ur5 + SLOW + "estimation:\n  offset_model: estimate\n"
-                       "  methods: [REFINED]\n")
     z, zd, used = [], [], 0
-    for seed in range(100, 140):
-        rec = simulate(tmp_path / f"s{seed}", first / "traj", "--config", first / "sim.yaml",
-                       "--seed", str(seed))
+    for cfg, rec in slow_ur5_draws(tmp_path):
         phi, _ = truth_phi(rec)
-        late = restamp_joints(rec, tmp_path / f"late{seed}", lcmtypes, lambda u: u + 10_000)
+        late = restamp_joints(rec, tmp_path / "late", lcmtypes, lambda u: u + 10_000)
         (refined,), _ = offline(cfg, late)
         fit = refined["refined"]
         used += fit["joint_delay_used"]
         zd.append((fit["joint_delay_s"] - 0.010) / fit["joint_delay_std_s"])
         z.append(abs(refined["mass"] - phi[0]) / refined["phi_std"][0])
-        shutil.rmtree(rec)
         shutil.rmtree(late)
     z, zd = np.array(z), np.array(zd)
     print("used", used, "delay error / std", np.round(zd, 2).tolist())
