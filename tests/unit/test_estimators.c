@@ -703,7 +703,7 @@ static void jacobi_eigenvalues(double *a, int n, double *lambda) {
  * T1)^T (D A_k T1), accumulated here and solved by Jacobi: the core starts
  * each call from the last one's eigenvectors, and that must not cost
  * accuracy. Halfway, the data jump (rows scaled by 30, as a collision
- * would), which the warm start must survive. Bound 1e-4 relative: the
+ * would), which the warm start must survive. Bound 7.5e-5 relative: the
  * residual test puts each Rayleigh quotient within 1e-6 rho / gap
  * (excitation.hpp); observed 2.5e-5, early on, where Upsilon's small
  * eigenvalues lie close together (1.7e-11 with the residual at 1e-6, whose
@@ -755,7 +755,7 @@ static void test_condition_number_every_update(void **state) {
         print_message("%s: condition number after each of %d updates, worst rel diff %.2e\n",
                       loadid_method_name(methods[m]), compared, worst);
         assert_true(compared > 1000);
-        assert_true(worst < 1e-4);
+        assert_true(worst < 7.5e-5);
         loadid_est_destroy(e);
     }
     dataset_free(&d);
