@@ -30,7 +30,7 @@ from alloc_report import counts, loop_sites
 from recordings import program, simulate
 from test_live_lcm import run_in_netns
 from test_live_no_alloc import counted
-from test_offline import write_config
+from offline_run import write_config
 from test_plot import png_size, read_rows
 
 NAMES = {1: "RLS", 2: "RIV", 3: "RTLS", 6: "REFINED"}
