@@ -17,7 +17,10 @@
  *   delay    the joint stamps' delay against the wrench's (a transport
  *            or clock offset: 5 ms of it cost 14 % of Ixx about the COM),
  *            fitted by Gauss-Newton on the predicted wrench's time
- *            derivative, with a standard error from its scores over
+ *            derivative, on the narrowest smoothing of the grid (a wide
+ *            one's noise, in the residual and in its derivative alike,
+ *            drew the fit towards 0), before the bandwidth trials, which
+ *            are then judged at it; a standard error from its scores over
  *            ten stretches of the window; used when 1 ms or more, at
  *            least 3 standard errors, and it lowers the residual
  *            (below 1 ms, the fit sees the misfit's phase too), and then
