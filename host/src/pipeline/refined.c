@@ -559,7 +559,7 @@ static double fit_delay(loadid_refined_t *r, int n_params, const loadid_real_t *
 #define DELAY_USE_US 1000
 #define DELAY_SIGNIFICANT 3.0
 static int delay_stands_out(double d, double std) {
-    return llabs(llround(d)) >= DELAY_USE_US && fabs(d) >= DELAY_SIGNIFICANT * std;
+    return fabs(d) >= fmax(DELAY_USE_US, DELAY_SIGNIFICANT * std);
 }
 
 /* Whether the kinematics in place (the delay d's) leave a lower residual
@@ -602,7 +602,7 @@ static int use_delay(loadid_refined_t *r, int n_params, const loadid_real_t *zer
      * 40 draws and the others' mass was 2-4.5 % off at up to 3.5 phi_std
      * (coverage 65 %). A significant one left (under DELAY_USE_US: the
      * misfit's phase, or not lowering the residual) adds b^2 std^2. */
-    const double d2 = used || fabs(d) >= DELAY_SIGNIFICANT * std ? 0.0 : d * d;
+    const double d2 = fabs(d) < DELAY_SIGNIFICANT * std ? d * d : 0.0;
     for (int p = 0; p < LOADID_NPHI; ++p) var[p] = sq(b[p]) * (d2 + sq(std));
     return used;
 }
@@ -776,17 +776,17 @@ int loadid_refined_run(loadid_refined_t *r, const loadid_config_t *cfg, int has_
             lowers_residual(r, n_params, zero_a, rep->levels.force, rep->levels.torque, t_ref))
             trial_delay = llround(delay);
     }
-    /* The narrowest's joints are in place: the trials from it upwards. */
+    /* The narrowest's joints are in place: its trial first, then the
+     * others'. */
     bandwidth_pick_t pick = {INFINITY, 0, 0, 0};
-    int best_trial = -1;
-    for (int k = 0; k < BANDWIDTH_GRID; ++k) {
-        const int trial = (narrowest + k) % BANDWIDTH_GRID;
+    band[narrowest] = narrow_ok ? pick_trial(r, psd[narrowest], n_params, zero_a, &rep->levels,
+                                             t_ref, trial_delay, &pick)
+                                : INFINITY;
+    int best_trial = isfinite(pick.band) ? narrowest : -1;
+    for (int trial = 0; trial < narrowest; ++trial) {
         const double least = pick.band;
-        band[trial] = k == 0 ? (narrow_ok ? pick_trial(r, psd[trial], n_params, zero_a,
-                                                       &rep->levels, t_ref, trial_delay, &pick)
-                                          : INFINITY)
-                             : bandwidth_trial(r, &jf, psd[trial], n_params, zero_a, &rep->levels,
-                                               t_ref, trial_delay, &pick);
+        band[trial] = bandwidth_trial(r, &jf, psd[trial], n_params, zero_a, &rep->levels, t_ref,
+                                      trial_delay, &pick);
         if (pick.band < least) best_trial = trial;
     }
     /* Then half a decade towards the best's better neighbour: a decade
