@@ -24,6 +24,7 @@ import pytest
 import joint_stall
 from accuracy import BOUNDS, assert_accuracy, load_errors
 from conftest import SANITIZER_PRELOAD
+import offline_run
 from recordings import program, read_truth
 
 HERE = pathlib.Path(__file__).resolve().parent
@@ -111,28 +112,20 @@ def test_estimates_come_while_estimating_and_at_done(session, recording):
         assert_accuracy(e, phi, **BOUNDS["default"])
 
 
-def test_final_estimates_equal_offline(session, recording, tmp_path):
-    # The session's configuration without its results directory: offline
-    # saves its estimate too, and would overwrite the live session's.
-    cfg = tmp_path / "offline.yaml"
-    cfg.write_text(re.sub(r"^results:\n(  .*\n)+", "", session["config"].read_text(), flags=re.M))
-    assert "results" not in cfg.read_text()
-    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(cfg),
-                        "--offline", str(recording)], capture_output=True, text=True, timeout=60)
-    assert r.returncode == 0, r.stderr
-    offline = {o["method"]: o for o in json.loads(r.stdout)}
+def test_final_estimates_equal_offline(session, recording):
+    off = offline_final(session["config"], recording)
     names = {1: "RLS", 2: "RIV", 3: "RTLS", 6: "REFINED"}
     finals = [e for e in session["estimate"] if e["state"] == 3]
     # One final estimate of every configured method, each a real one.
     assert sorted(e["method"] for e in finals) == [1, 2, 3, 6], finals
     for e in finals:
-        o = offline[names[e["method"]]]
+        o = off[names[e["method"]]]
         assert e["samples"] == 1500 and np.all(np.isfinite(e["phi"]))
         assert e["samples"] == o["samples"]
         np.testing.assert_allclose(e["phi"], o["phi"], rtol=1e-9, atol=1e-12)
 
 
-def test_load_model_at_done_equals_offline(session, recording, tmp_path):
+def test_load_model_at_done_equals_offline(session, recording):
     """One load_model_t on LOADID_MODEL at DONE, once REFINED is in from the
     worker: the primary method's (REFINED: every group identified, and ties
     go to it), its model as --offline computes it."""
@@ -140,12 +133,7 @@ def test_load_model_at_done_equals_offline(session, recording, tmp_path):
     assert len(models) == 1, models
     m = models[0]
     assert m["method"] == 6 and m["identified"] == 7 and m["load_name"] == "o1"
-    cfg = tmp_path / "offline.yaml"
-    cfg.write_text(re.sub(r"^results:\n(  .*\n)+", "", session["config"].read_text(), flags=re.M))
-    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(cfg), "--offline", str(recording)],
-                       capture_output=True, text=True, timeout=60)
-    assert r.returncode == 0, r.stderr
-    o = next(o for o in json.loads(r.stdout) if o["method"] == "REFINED")
+    o = offline_final(session["config"], recording)["REFINED"]
     np.testing.assert_allclose(m["phi"], o["model_phi"], rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(m["phi_std"], o["phi_std"], rtol=1e-6)
     assert bool(m["projected"]) == o["projected"]
@@ -256,10 +244,9 @@ def offline_final(cfg, rec, *extra):
     estimate too)."""
     plain = cfg.parent / "offline.yaml"
     plain.write_text(re.sub(r"^results:\n(  .*\n)+", "", cfg.read_text(), flags=re.M))
-    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(plain), "--offline", str(rec),
-                        *extra], capture_output=True, text=True, timeout=60)
-    assert r.returncode == 0, r.stderr
-    return {o["method"]: o for o in json.loads(r.stdout)}
+    assert "results" not in plain.read_text()
+    result, _ = offline_run.offline(plain, rec, *extra)
+    return {o["method"]: o for o in result}
 
 
 # (stall length ms, when after START ms): 20 ms alone (complete), then 50

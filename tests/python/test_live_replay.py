@@ -30,6 +30,7 @@ from alloc_report import counts, loop_sites
 from recordings import program, simulate
 from test_live_lcm import run_in_netns
 from test_live_no_alloc import counted
+import offline_run
 from offline_run import write_config
 from test_plot import png_size, read_rows
 
@@ -69,12 +70,10 @@ def session(config, recording, tmp_path_factory):
 def run_offline(config, recording):
     """loadidd --offline --verbose: its results by method, the samples it
     counted and its log."""
-    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(config), "--offline",
-                        str(recording), "--verbose"], capture_output=True, text=True, timeout=60)
-    assert r.returncode == 0, r.stderr
-    ok = re.search(r"^loadidd: samples ok (\d+),", r.stderr, re.M)
-    return {"result": {o["method"]: o for o in json.loads(r.stdout)},
-            "samples_ok": int(ok.group(1)), "stderr": r.stderr}
+    result, err = offline_run.offline(config, recording, "--verbose")
+    ok = re.search(r"^loadidd: samples ok (\d+),", err, re.M)
+    return {"result": {o["method"]: o for o in result}, "samples_ok": int(ok.group(1)),
+            "stderr": err}
 
 
 @pytest.fixture(scope="module")
@@ -162,10 +161,7 @@ def test_the_session_is_traced_beside_its_saved_result(session, offline, config,
                                    atol=1e-12)
     # The recording traced offline: the same rows.
     off = tmp_path / "offline.csv"
-    r = subprocess.run([program("LOADIDD_EXE"), "--config", str(config), "--offline",
-                        str(recording), "--trace", str(off), "--publish-every", "1"],
-                       capture_output=True, text=True, timeout=60)
-    assert r.returncode == 0, r.stderr
+    offline_run.offline(config, recording, "--trace", off, "--publish-every", "1")
     orows = read_rows(off)
     assert [(o["method"], o["samples"]) for o in orows] == \
         [(x["method"], x["samples"]) for x in rows]
