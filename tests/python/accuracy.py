@@ -34,8 +34,9 @@ BOUNDS = {
     # drop-frames 1 %: max 0.33 %, 0.36 mm, 4.9 %
     "damage-drop-frames": dict(mass_pct=0.81, com_mm=0.89, moment_pct=12.3),
     # the vcan VM's live daemon: default, the JR3 frames VCAN_LAG_US late;
-    # max 0.35 %, 0.35 mm, 3.9 % (RTLS, RIV, RLS, REFINED)
-    "vcan": dict(mass_pct=0.86, com_mm=0.86, moment_pct=9.8),
+    # max 0.34 %, 0.34 mm, 3.9 % (RTLS, RIV, RLS, REFINED; with 80 us:
+    # 0.33 %, 0.35 mm, 3.9 %)
+    "vcan": dict(mass_pct=0.86, com_mm=0.86, moment_pct=9.9),
     # test_live_modbus.py's live session (the serial sensor polled at 500 Hz,
     # signals kf, the sensor lost and found, faults), run live per seed:
     # max 0.41 %, 0.58 mm, 5.9 % (RTLS, RIV, RLS alike; with the sensor
@@ -47,9 +48,10 @@ BOUNDS = {
 # The vcan VM (tests/vm/run_vcan_vm.sh) replays a recording in real time:
 # its JR3 frames carry the kernel's receive times, later than the replay's
 # schedule, which the joint states' utimes keep (test_vcan_vm.py measures
-# it: 58 us at the median, 78 at most); error_survey's "vcan" scenario
-# delays every frame by this much [us].
-VCAN_LAG_US = 80
+# it: about 58 us at the median, 79-82 us at the 99th percentile);
+# error_survey's "vcan" scenario delays every frame by this much [us],
+# twice what the VM shows, so that its p99 has room under this bound.
+VCAN_LAG_US = 160
 
 
 def physical(phi):
