@@ -1243,11 +1243,12 @@ def claims_table(cl) -> str:
                        for g, (_, b) in CLAIM_WRONG.items())
     lines = ["", f"claims (runs with the group identified) and, of them, wrong ones (the load "
              f"model off by more than {bounds}), per noise cell over its recordings"]
-    lines.append(f"{'noise':<12}{'method':<10}{'runs':>6}" +
+    w = max([len("noise")] + [len(n) for n in cl]) + 1  # paper_jitter400 is 15 long
+    lines.append(f"{'noise':<{w}}{'method':<10}{'runs':>6}" +
                  "".join(f"{g + ' wrong/claimed':>22}" for g in CLAIM_WRONG))
     for n, ms in cl.items():
         for m, c in ms.items():
-            lines.append(f"{n:<12}{m:<10}{c['runs']:>6}" +
+            lines.append(f"{n:<{w}}{m:<10}{c['runs']:>6}" +
                          "".join(f"{str(c[g]['wrong']) + '/' + str(c[g]['claimed']):>22}"
                                  for g in CLAIM_WRONG))
     return "\n".join(lines)
