@@ -33,6 +33,9 @@ static void test_each_reason_in_words(void **state) {
         const char *text;
     } cases[] = {
         {0, LOADID_WHY_STD, 19.5, "phi_std 19.5 times its bound"},
+        /* Just past the bound: never "1 times". */
+        {2, LOADID_WHY_STD, 1.0004, "phi_std 1.0004 times its bound"},
+        {2, LOADID_WHY_GYRATION, 1.003, "radius of gyration 1.003 times its bound"},
         {2, LOADID_WHY_STD, INFINITY, "phi_std infinite: the data do not bound it"},
         {2, LOADID_WHY_STD, NAN, "phi_std not a number: its covariance failed"},
         {1, LOADID_WHY_NEEDS, 0, "needs the mass"},

@@ -6,6 +6,15 @@
 #include <math.h>
 #include <stdio.h>
 
+/* R as "%.3g", with more digits where that would round a ratio just past
+ * its bound to "1" (the bound is exceeded by definition here). */
+static void ratio(char *buf, size_t len, double over) {
+    int digits = 3;
+    const double off = fabs(over - 1);
+    while (digits < 9 && off > 0 && off < 5 * pow(10, -digits)) ++digits;
+    snprintf(buf, len, "%.*g", digits, over);
+}
+
 int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char *out, size_t len) {
     if (!out || len == 0) return 0;
     out[0] = '\0';
@@ -17,6 +26,8 @@ int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char
     if (!e->has_model || (e->identified & (1 << group))) return 0;
     static const char *const needs[3] = {"", "needs the mass", "needs the com"};
     const double over = e->ident_over[group];
+    char r[24];
+    ratio(r, sizeof r, over);
     switch (e->ident_why[group]) {
         case LOADID_WHY_NO_MASS:
             snprintf(out, len, "no positive mass");
@@ -27,13 +38,13 @@ int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char
             else if (isinf(over))
                 snprintf(out, len, "phi_std infinite: the data do not bound it");
             else
-                snprintf(out, len, "phi_std %.3g times its bound", over);
+                snprintf(out, len, "phi_std %s times its bound", r);
             break;
         case LOADID_WHY_NEEDS:
             snprintf(out, len, "%s", needs[group]);
             break;
         case LOADID_WHY_GYRATION:
-            snprintf(out, len, "radius of gyration %.3g times its bound", over);
+            snprintf(out, len, "radius of gyration %s times its bound", r);
             break;
         case LOADID_WHY_SNR:
             if (!isfinite(over)) {
@@ -41,15 +52,15 @@ int loadid_pipeline_why_not(const loadid_pipeline_estimate_t *e, int group, char
                 break;
             }
             snprintf(out, len,
-                     "its torque stands out of the noise %.3g times less than the bound, "
+                     "its torque stands out of the noise %s times less than the bound, "
                      "as on slow or mostly translational motion",
-                     over);
+                     r);
             break;
         case LOADID_WHY_JOINT_NOISE:
             snprintf(out, len,
-                     "the joint positions are %.3g times noisier than kalman.meas_sigma: "
+                     "the joint positions are %s times noisier than kalman.meas_sigma: "
                      "phi_std does not count what the joint filters passed on",
-                     over);
+                     r);
             break;
         case LOADID_WHY_JOINT_STAMPS:
             snprintf(out, len,
