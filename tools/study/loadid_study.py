@@ -3,7 +3,7 @@
 recordings, against an independent reference computed here.
 
 For every cell (robot x load x noise) and every seed it runs the SHIPPED
-programs of a build tree -- loadid-traj once per robot (cached), loadid-sim
+programs of a build tree -- loadid-traj once per robot and seed (cached), loadid-sim
 for the recording, ``loadidd --offline`` for the estimates of every method --
 and, from the same recording, a batch total least squares written here in
 numpy and Pinocchio only (the "reference": what the data support). It prints
@@ -28,7 +28,8 @@ The coverage of phi_std (``pooled_coverage``): per robot and method, each
 parameter's share of runs with |error| <= 2 phi_std over all the robot's
 recordings, with its 95 % (Wilson) interval, marked where that interval lies
 wholly outside the 90-98 % target. Every recording draws its own noise
-(``sim_seed``), so the pooled runs are independent.
+(``sim_seed``) and, unless ``--one-trajectory``, a seed's own trajectory,
+so the pooled runs are independent.
 
 Run it with the project's venv: ``tools/study/loadid-study --quick``
 (``--help`` lists the options; ``--self-test`` checks this file's own
@@ -1604,11 +1605,11 @@ def main(argv=None) -> int:
     ap.add_argument("--offset-model", choices=("zeroing", "estimate"), default=None,
                     help="estimation.offset_model for the estimators (default: the "
                          "configuration's)")
-    ap.add_argument("--trajectory-per-seed", action="store_true",
-                    help="design a trajectory per seed (loadid-traj --seed N) instead of one per "
-                         "robot: the coverage of phi_std then covers the trajectory's own "
-                         "deterministic misfit (servo lag, backlash, quantisation) as a random "
-                         "quantity, as over the trajectories a user designs")
+    ap.add_argument("--one-trajectory", action="store_true",
+                    help="one trajectory per robot for every seed, instead of one per seed "
+                         "(loadid-traj --seed N): the seeds then vary the noise only, and the "
+                         "trajectory's own deterministic misfit (servo lag, backlash, "
+                         "quantisation) is one bias in every run of a robot")
     ap.add_argument("--quick", action="store_true",
                     help="3 seeds, rx60, loads o1 and box, paper noise (options given override)")
     ap.add_argument("--keep", action="store_true",
@@ -1665,13 +1666,15 @@ def main(argv=None) -> int:
     stamp = program_stamp(build)
     log(f"build {build}; work folder {work}")
 
-    # One trajectory per robot (or per robot and seed), designed once and
-    # cached in the work folder.
+    # A trajectory per robot and seed (or one per robot), designed once and
+    # cached in the work folder: over the seeds the misfit a trajectory
+    # brings then varies as over the trajectories users design.
+    per_seed = not a.one_trajectory
     trajectories = {}
     for robot in robots:
         cfg = work / "configs" / f"traj-{robot}.yaml"
         cfg.write_text(robot_yaml(robot))
-        for seed in (range(1, seeds + 1) if a.trajectory_per_seed else [None]):
+        for seed in (range(1, seeds + 1) if per_seed else [None]):
             name = f"{robot}-mc300-c1-e800" + (f"-s{seed}" if seed else "")
             tp = work / "traj" / f"{name}.yaml"
             if not tp.is_file():
@@ -1706,7 +1709,7 @@ def main(argv=None) -> int:
                                       sim_seed=sim_seed(robot, load, cells[0], seed),
                                       sim_config=str(sp),
                                       trajectory=str(trajectories[
-                                          (robot, seed if a.trajectory_per_seed else None)]),
+                                          (robot, seed if per_seed else None)]),
                                       methods=methods, keep=a.keep,
                                       cells=[dict(noise=n, est_config=str(est_cfgs[n]))
                                              for n in cells]))
@@ -1739,7 +1742,7 @@ def main(argv=None) -> int:
 
     write_csv(out_dir / "runs.csv", rows)
     meta = dict(build=str(build), workdir=str(work), robots=robots, loads=loads, noise=noises,
-                seeds=seeds, trajectory_per_seed=a.trajectory_per_seed, methods=methods,
+                seeds=seeds, trajectory_per_seed=per_seed, methods=methods,
                 jobs=a.jobs, seconds=elapsed,
                 programs_changed_during_run=changed,
                 loads_phi={k: list(map(float, load_phi(k))) for k in loads},
