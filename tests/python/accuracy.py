@@ -38,11 +38,12 @@ BOUNDS = {
     # 0.33 %, 0.35 mm, 3.9 %)
     "vcan": dict(mass_pct=0.86, com_mm=0.86, moment_pct=9.9),
     # test_live_modbus.py's live session (the serial sensor polled at 500 Hz,
-    # signals kf, the sensor lost and found, faults), run live per seed:
-    # max 0.41 %, 0.58 mm, 5.9 % (RTLS, RIV, RLS alike; with the sensor
-    # back at 0.60 s instead of 0.40 an earlier survey's max was 0.81 %,
-    # 0.60 mm, 5.4 %)
-    "modbus": dict(mass_pct=1.1, com_mm=1.6, moment_pct=16.0),
+    # signals kf, the sensor lost and found, faults), run live per seed,
+    # 80 seeds (--seeds 60, then 20): max 0.78 %, 0.55 mm, 7.7 % (RTLS, RIV,
+    # RLS alike). A live session polls another half of the samples each
+    # run, so it draws its noise anew: one 20-seed survey's max had been
+    # 0.41 %, and the mass bound from it was crossed once (RIV 1.53 %).
+    "modbus": dict(mass_pct=2.0, com_mm=1.4, moment_pct=19.2),
 }
 
 # The vcan VM (tests/vm/run_vcan_vm.sh) replays a recording in real time:

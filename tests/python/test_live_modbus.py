@@ -84,7 +84,7 @@ def test_final_rtls_estimate_from_the_serial_sensor_finds_the_load(session):
     assert 500 <= rtls["samples"] <= 760, rtls["samples"]
     truth = json.loads(read_truth(session["recording"])["load.phi"])
     # Mass, COM and principal moments within BOUNDS["modbus"] (accuracy.py:
-    # 2.5 x the worst of 20 seeds of this very session, error_survey.py
+    # 2.5 x the worst of 80 seeds of this very session, error_survey.py
     # --scenario modbus), for every method; estimate_t's mass and com are
     # its phi's.
     for e in final:
