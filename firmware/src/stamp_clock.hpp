@@ -95,7 +95,7 @@ inline double periods_of(double dt, double p) {
 
 class StampClock {
   public:
-    void reset() { s_.last_raw = INT64_MIN, s_.restarts = 0; }
+    void reset() { s_.last_raw = INT64_MIN, s_.restarts = 0, s_.outlier_rate = 0; }
 
     // The newest stamp taken (INT64_MIN: none) and the period now.
     int64_t last_raw() const { return s_.last_raw; }
@@ -185,12 +185,17 @@ class StampClock {
         double i = 0, base = 0;
         int64_t restarts = 0;
         int outliers = 0; // in a row
+        // The share of stamps that were outliers (kRateWindow's moving
+        // average, kept through restarts: the stream's jitter, not its phase).
+        double outlier_rate = 0;
         int held_off = 0; // counted stamps off their period, in a row
     };
     static constexpr int kMaxAcquire = 1000000;
     static constexpr double kOtherRate = 1.75; // a first interval this many periods: another rate
-    static constexpr int kRestartAfter = 3;    // outliers in a row
-    static constexpr int kMaxCount = 1000000;  // periods one stamp may count
+    static constexpr int kRestartAfter = 3;    // outliers in a row, at least
+    static constexpr int kRestartAfterMax = 16;
+    static constexpr double kRateWindow = 256;
+    static constexpr int kMaxCount = 1000000; // periods one stamp may count
     // Counted stamps off their period in a row that start the clock again:
     // a burst of kLookAhead makes kLookAhead - 1; more is a clock that
     // counts every stamp a period short (jitter of half a period).
@@ -202,9 +207,31 @@ class StampClock {
         return !s.acquiring || s.line.n >= kStampSlopeFrom ? s.period : s.base;
     }
 
-    // An outlier stamp: the next period, when not the kRestartAfter-th in a
+    // Outliers in a row that start the clock again: kRestartAfter, or as
+    // many as jitter of the stream's outlier rate q makes in a row once in
+    // 1e6 stamps (q^n <= 1e-6). Jitter over half a period makes early
+    // stamps outliers at random (uniform +-700 us at 1 kHz: q 0.14): three
+    // in a row restarted the clock every few hundred stamps, each restart
+    // put the filters on raw jittered stamps, and slow motion's on-line
+    // estimates lost 60-80 % of the mass. A stream that moved makes
+    // outliers every stamp, and still restarts within kRestartAfterMax.
+    static int restart_run(double q) {
+        if (!(q > 0.01)) return kRestartAfter;
+        const double n = std::ceil(std::log(1e-6) / std::log(std::min(q, 0.5)));
+        return int(std::clamp(n, double(kRestartAfter), double(kRestartAfterMax)));
+    }
+
+    // The outlier rate with one more stamp.
+    static void seen(State &s, bool outlier) {
+        s.outlier_rate += ((outlier ? 1.0 : 0.0) - s.outlier_rate) / kRateWindow;
+    }
+
+    // An outlier stamp: the next period, when not the restart_run-th in a
     // row (then false: start again).
-    static bool next(State &s) { return ++s.outliers < kRestartAfter; }
+    static bool next(State &s) {
+        seen(s, true);
+        return ++s.outliers < restart_run(s.outlier_rate);
+    }
 
     // A stamp counted k periods on by count_ahead() but over half a period
     // off them (delayed, or in a burst): taken there, at the line's or
@@ -270,7 +297,7 @@ class StampClock {
             }
             return restart(s, t_raw, p0);
         }
-        if (!off) s.outliers = s.held_off = 0;
+        if (!off) s.outliers = s.held_off = 0, seen(s, false);
         s.i += k;
         s.line.add(s.i, double(t_raw - s.t0));
         s.period = s.line.slope();
@@ -292,6 +319,7 @@ class StampClock {
             s.t += k * s.period + g * err;
             s.period += g * g / 4 * err / k;
             s.outliers = s.held_off = 0;
+            seen(s, false);
         } else if (next(s)) {
             s.t += s.period;
         } else {

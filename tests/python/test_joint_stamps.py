@@ -263,6 +263,25 @@ def test_half_a_period_of_stamp_jitter(trajectory, tmp_path):
             assert abs(est["mass"] - phi[0]) <= 3 * est["phi_std"][0], est["method"]
 
 
+@pytest.mark.parametrize("seed", [2, 3])
+def test_stamp_jitter_over_half_a_period(trajectory, tmp_path, seed):
+    """Both streams' stamps jittered by up to 550 us at 1 kHz (uniform,
+    kept in order by loadid-sim): early joint stamps are outliers at random
+    (5 %), and three in a row had restarted the stamp clock again and
+    again, the filters on raw jittered stamps, the on-line methods 10.7 and
+    15.6 % off in mass on these draws (flagged). With the run that restarts
+    it grown with the stream's outlier rate every method is within the
+    bounds (seen 0.09 % at most) and claims its mass."""
+    rec = simulate(tmp_path / "rec", trajectory, "--seed", str(seed), "--config",
+                   write_config(tmp_path / "sim.yaml", "simulation:\n  jitter_us: 550\n"))
+    phi, _ = truth_phi(rec)
+    cfg = write_config(tmp_path / "c.yaml", "estimation:\n  methods: [RTLS, RIV, RLS, REFINED]\n")
+    result, _ = offline(cfg, rec)
+    for est in result:
+        assert_close_to_truth(est, phi)
+        assert "mass" in est["identified"], (est["method"], est["not_identified"])
+
+
 def test_joint_delay_standard_error_matches_its_error_over_seeds(trajectory, tmp_path):
     """The delay's standard error against the fit's own error over twelve
     noise draws of one trajectory, simulated without a delay (the CAN

@@ -530,20 +530,30 @@ static void check_regularised(loadid_signals_t *s, pending_t *pend, int64_t t, i
  * the probe dated short intervals a period back) but locks, and the
  * stamps are within 150 us (101 seen; 96 before the look-ahead, and 1.2
  * ms with a first count of it by the held stamps' median, which settled on
- * a line 2 % short), alpha within 1 (0.43). */
+ * a line 2 % short), alpha within 1 (0.43). At 600 us (kept in order),
+ * over half a period, early stamps are outliers at random (8 %): three in
+ * a row restarted the clock from an early stamp, whose state the filters
+ * refused as dated before their last one, until the run that restarts it
+ * grew with the stream's outlier rate; now no restart, locked, the stamps within
+ * 800 us (378 and 396 seen on two draws: the raw ones are 600 off), the
+ * period within 1 us and alpha within 1 (0.37). */
 static void jittered_stamps_are_regularised(void **state) {
     (void)state;
-    const int64_t jitters[] = {200, 400, 450};
+    const int64_t jitters[] = {200, 400, 450, 600};
     for (size_t j = 0; j < sizeof jitters / sizeof jitters[0]; ++j) {
         const int64_t jit = jitters[j];
         loadid_signals_t *s = make_probing(8, 50000);
         uint32_t lcg = 12345u;
         double worst = 0, worst_alpha = 0;
         pending_t pend = {0};
+        int64_t last = 0;
         for (int k = 0; k < 1500; ++k) {
             const int64_t t = (int64_t)k * 1000;
             lcg = lcg * 1664525u + 1013904223u;
-            const int64_t stamp = 1000000 + t + (int64_t)(lcg >> 8) % (2 * jit + 1) - jit;
+            int64_t stamp = 1000000 + t + (int64_t)(lcg >> 8) % (2 * jit + 1) - jit;
+            /* Over half a period, kept in order as loadid-sim does. */
+            stamp = stamp > last ? stamp : last + 1;
+            last = stamp;
             loadid_real_t q[3 * NJ];
             quad_at(&kMeasured, seconds(t), q);
             assert_int_equal(loadid_signals_push_joints(s, stamp, NJ, q, NULL), 0);
@@ -561,9 +571,9 @@ static void jittered_stamps_are_regularised(void **state) {
             "stream period %.3f us, restarts %lld\n",
             (long long)jit, worst, worst_alpha, loadid_signals_stream_period_us(s),
             (long long)st.stamp_restarts);
-        if (jit <= 400) assert_int_equal(st.stamp_restarts, 0);
+        if (jit != 450) assert_int_equal(st.stamp_restarts, 0);
         assert_int_equal(st.stamp_acquiring, 0); /* locked */
-        assert_true(worst <= (jit <= 400 ? 100 : 150));
+        assert_true(worst <= (jit <= 400 ? 100 : jit <= 450 ? 150 : 800));
         assert_true(fabs(loadid_signals_stream_period_us(s) - 1000) < 1);
         assert_true(worst_alpha > 0 && worst_alpha < 1.0);
         loadid_signals_destroy(s);
