@@ -191,11 +191,11 @@ class StampClock {
         int held_off = 0; // counted stamps off their period, in a row
     };
     static constexpr int kMaxAcquire = 1000000;
-    static constexpr double kOtherRate = 1.75; // a first interval this many periods: another rate
-    static constexpr int kRestartAfter = 3;    // outliers in a row, at least
-    static constexpr int kRestartAfterMax = 16;
-    static constexpr double kRateWindow = 256;
-    static constexpr int kMaxCount = 1000000; // periods one stamp may count
+    static constexpr double kOtherRate = 1.75;  // a first interval this many periods: another rate
+    static constexpr int kRestartAfter = 3;     // outliers in a row, at least
+    static constexpr int kRestartAfterMax = 16; // and at most (restart_run)
+    static constexpr double kRateWindow = 256;  // stamps the outlier rate averages
+    static constexpr int kMaxCount = 1000000;   // periods one stamp may count
     // Counted stamps off their period in a row that start the clock again:
     // a burst of kLookAhead makes kLookAhead - 1; more is a clock that
     // counts every stamp a period short (jitter of half a period).
@@ -210,11 +210,12 @@ class StampClock {
     // Outliers in a row that start the clock again: kRestartAfter, or as
     // many as jitter of the stream's outlier rate q makes in a row once in
     // 1e6 stamps (q^n <= 1e-6). Jitter over half a period makes early
-    // stamps outliers at random (uniform +-700 us at 1 kHz: q 0.14): three
-    // in a row restarted the clock every few hundred stamps, each restart
-    // put the filters on raw jittered stamps, and slow motion's on-line
-    // estimates lost 60-80 % of the mass. A stream that moved makes
-    // outliers every stamp, and still restarts within kRestartAfterMax.
+    // stamps outliers at random (uniform +-550 us at 1 kHz: q 0.05): three
+    // in a row restarted the clock several times in a 3 s recording, each restart
+    // put the filters on raw jittered stamps, and the on-line estimates lost
+    // 10-16 % of the mass on three of four draws of the test trajectory. A
+    // stream that moved makes outliers every stamp, and still restarts
+    // within kRestartAfterMax.
     static int restart_run(double q) {
         if (!(q > 0.01)) return kRestartAfter;
         const double n = std::ceil(std::log(1e-6) / std::log(std::min(q, 0.5)));
