@@ -526,11 +526,12 @@ static void check_regularised(loadid_signals_t *s, pending_t *pend, int64_t t, i
  * 2.75 rad/s: what the loop
  * leaves of the jitter, a few us, moves a joint by 1e-5 rad, ten encoder
  * steps; 3e-11 without jitter), the clock never restarted and locked. At
- * 450 us, nearly half a period, it may restart (1 seen, early; 2 before
- * the probe dated short intervals a period back) but locks, and the
- * stamps are within 150 us (101 seen; 96 before the look-ahead, and 1.2
- * ms with a first count of it by the held stamps' median, which settled on
- * a line 2 % short), alpha within 1 (0.43). At 600 us (kept in order),
+ * 450 us, nearly half a period, it may restart (none seen; 1, early,
+ * before the restart run grew with the outlier rate, 2 before the probe
+ * dated short intervals a period back) but locks, and the stamps are
+ * within 150 us (85 seen; 101 with that restart, 96 before the
+ * look-ahead, and 1.2 ms with a first count of it by the held stamps'
+ * median, which settled on a line 2 % short), alpha within 1 (0.41). At 600 us (kept in order),
  * over half a period, early stamps are outliers at random (8 %): three in
  * a row restarted the clock from an early stamp, whose state the filters
  * refused as dated before their last one, until the run that restarts it
