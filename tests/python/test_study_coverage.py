@@ -125,7 +125,49 @@ def test_targets_tell_noise_from_a_real_excess():
     assert [i["cell"] for i in t["over"]] == ["rx60/b/paper"]
     text = st.targets_text([t])
     assert "met in 7 of 9; over within the interval 1; over beyond it 1" in text
-    assert "OVER rx60/b/paper mass_pct: 1.30 [1.20, 1.40]" in text
+    assert "OVER rx60/b/paper mass_pct: 1.300 [1.20, 1.40]" in text
+
+
+def test_targets_give_the_rms_error_ratio_beside_the_medians():
+    # A median ratio over the target where the RMS errors are alike (the
+    # base's middle seed fell low) against one where they are not.
+    summary = [_cell("a", 1.3, 1.0, [0.95, 1.6]), _cell("b", 1.3, 1.0, [0.95, 1.6])]
+    summary[0]["methods"]["REFINED"]["mass_pct"]["rms"] = 2.02
+    summary[0]["methods"]["REF"]["mass_pct"]["rms"] = 2.0
+    summary[1]["methods"]["REFINED"]["mass_pct"]["rms"] = 3.0
+    summary[1]["methods"]["REF"]["mass_pct"]["rms"] = 2.0
+    (t,) = [t for t in st.target_checks(summary) if t["method"] == "REFINED"
+            and t["base"] == "REF"]
+    assert [i["rms_ratio"] for i in t["over_in_noise"]] == pytest.approx([1.01, 1.5])
+    text = st.targets_text([t])
+    assert "over rx60/a/paper mass_pct: 1.300 [0.95, 1.60], RMS error ratio 1.01" in text
+    assert "over rx60/b/paper mass_pct: 1.300 [0.95, 1.60], RMS error ratio 1.50" in text
+    settled = st.targets_text([t], dict(seeds=200, cells=["rx60/a/paper", "rx60/b/paper"]))
+    assert "settled: the 2 cells over a target only within their interval, with seeds 1..200" \
+        in settled
+
+
+def test_settling_runs_a_cells_own_recordings_with_more_seeds(tmp_path):
+    # --settle's recordings of wrong3x are paper's (one simulation), named
+    # and seeded as the main run's, whichever of the two is settled.
+    (tmp_path / "traj").mkdir()
+    (tmp_path / "configs").mkdir()
+    for seed in (21, 22):  # cached: nothing is designed
+        (tmp_path / "traj" / f"rx60-mc300-c1-e800-s{seed}.yaml").write_text("")
+    study = dict(build=tmp_path, work=tmp_path, methods=["RTLS", "REFINED"],
+                 noises=["low", "paper", "wrong3x"], per_seed=True, keep=False, jobs=1,
+                 log=lambda msg: None, est=dict(signals=None, lag=None, jerk_psd=None,
+                                                offset_model=None))
+    tasks = st.plan_tasks(study, [("rx60", "o1", "wrong3x")], range(21, 23))
+    assert [t["rec_name"] for t in tasks] == ["rx60-o1-paper-s21", "rx60-o1-paper-s22"]
+    assert [t["sim_seed"] for t in tasks] == [st.sim_seed("rx60", "o1", "paper", s)
+                                              for s in (21, 22)]
+    assert [[c["noise"] for c in t["cells"]] for t in tasks] == [["wrong3x"], ["wrong3x"]]
+    both = st.plan_tasks(study, [("rx60", "o1", "paper"), ("rx60", "o1", "wrong3x"),
+                                 ("rx60", "o1", "low")], range(21, 22))
+    assert sorted((t["rec_name"], tuple(c["noise"] for c in t["cells"])) for t in both) == [
+        ("rx60-o1-low-s21", ("low",)), ("rx60-o1-paper-s21", ("paper", "wrong3x"))]
+    assert all(t["trajectory"].endswith("-s21.yaml") for t in both)
 
 
 def _rls_cell(name, share, ci):

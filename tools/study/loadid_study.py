@@ -985,7 +985,8 @@ def summarise(rows, methods):
             for k in METRICS:
                 v = np.array([r[k] for r in ok], float)
                 s[k] = dict(median=float(np.median(v)) if len(v) else None,
-                            p90=float(np.percentile(v, 90)) if len(v) else None)
+                            p90=float(np.percentile(v, 90)) if len(v) else None,
+                            rms=float(np.sqrt(np.mean(v ** 2))) if len(v) else None)
             if m not in REF_METHODS:
                 cov = np.array([[r.get(f"cov{i}", "") for i in range(10)] for r in ok], object)
                 det = cov != "" if cov.size else np.zeros((0, 10), bool)
@@ -1113,7 +1114,8 @@ def target_checks(summary):
                     continue
                 ci = (s.get("ratio_ci90") or {}).get(base, {}).get(k)
                 item = dict(cell=f"{e['robot']}/{e['load']}/{e['noise']}", metric=k, ratio=r,
-                            ci90=ci)
+                            ci90=ci, rms_ratio=(s[k]["rms"] / b[k]["rms"]
+                                                if s[k].get("rms") and b[k].get("rms") else None))
                 # Against RLS the target allows an excess that identified
                 # says: the group not identified (not claimed) in every run.
                 u = (s.get("unidentified") or {}).get(GROUP_OF[k]) or {}
@@ -1126,9 +1128,11 @@ def target_checks(summary):
     return out
 
 
-def targets_text(checks) -> str:
+def targets_text(checks, settled=None) -> str:
     lines = ["", "accuracy targets (median error over a cell's seeds against the base's; "
-             "90 % interval by a paired bootstrap of the seeds)"]
+             "90 % interval by a paired bootstrap of the seeds)" if not settled else
+             f"settled: the {len(settled['cells'])} cells over a target only within their "
+             f"interval, with seeds 1..{settled['seeds']} (their every target again)"]
     for t in checks:
         flagged = t.get("flagged", [])
         n_over = len(t["over"]) + len(t["over_in_noise"])
@@ -1147,7 +1151,8 @@ def targets_text(checks) -> str:
         for i in t["over"] + t["over_in_noise"]:
             ci = i["ci90"]
             lines.append(f"    {'OVER' if i in t['over'] else 'over'} {i['cell']} {i['metric']}: "
-                         f"{i['ratio']:.2f}" + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else ""))
+                         f"{i['ratio']:.3f}" + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "")
+                         + (f", RMS error ratio {i['rms_ratio']:.2f}" if i.get("rms_ratio") else ""))
     return "\n".join(lines)
 
 
@@ -1553,6 +1558,99 @@ def self_test() -> int:
 # --------------------------------------------------------------------------
 
 
+def design_trajectories(study, robots, seed_range) -> dict:
+    """A trajectory per robot and seed (or one per robot), designed once and
+    cached in the work folder: over the seeds the misfit a trajectory brings
+    then varies as over the trajectories users design. (robot, seed or None)
+    -> its file."""
+    build, work, log = study["build"], study["work"], study["log"]
+    out = {}
+    for robot in robots:
+        cfg = work / "configs" / f"traj-{robot}.yaml"
+        cfg.write_text(robot_yaml(robot))
+        for seed in (seed_range if study["per_seed"] else [None]):
+            name = f"{robot}-mc300-c1-e800" + (f"-s{seed}" if seed else "")
+            tp = work / "traj" / f"{name}.yaml"
+            if not tp.is_file():
+                r = run(build, "traj", ["--config", cfg, *TRAJ_BUDGET, "--out", tp,
+                                        *(["--seed", seed] if seed else [])], log=log)
+                kappa = [l for l in r.stderr.splitlines() if "kappa_design" in l]
+                log(f"trajectory {name}: {(kappa or [r.stderr.strip()])[-1]} -> {tp}")
+            else:
+                log(f"trajectory {name}: cached {tp}")
+            out[(robot, seed)] = tp
+    return out
+
+
+def plan_tasks(study, cells, seed_range) -> list:
+    """One task per recording of the cells (robot, load, noise) and seeds;
+    noise cells of one robot and load that simulate the same recording
+    share it (named and seeded by the first of them in the study's noise
+    list, so a seed's recording is the same whichever cells ask for it)."""
+    work, methods = study["work"], study["methods"]
+    robots = list(dict.fromkeys(c[0] for c in cells))
+    trajectories = design_trajectories(study, robots, seed_range)
+    heads = {}
+    for n in study["noises"]:
+        heads.setdefault(sim_key(n), n)
+    tasks = []
+    for robot in robots:
+        mine = [c for c in cells if c[0] == robot]
+        est_cfgs = {}
+        for noise in dict.fromkeys(c[2] for c in mine):
+            p = work / "configs" / f"est-{robot}-{noise}.yaml"
+            p.write_text(est_config(robot, noise, methods, **study["est"]))
+            est_cfgs[noise] = p
+        for load in dict.fromkeys(c[1] for c in mine):
+            groups = {}
+            for (_, l, noise) in mine:
+                if l == load:
+                    groups.setdefault(heads[sim_key(noise)], []).append(noise)
+            for head, group in groups.items():
+                sim_name = f"{robot}-{load}-{head}"
+                sp = work / "configs" / f"sim-{sim_name}.yaml"
+                sp.write_text(sim_config(robot, load, head))
+                for seed in seed_range:
+                    tasks.append(dict(build=str(study["build"]), workdir=str(work), robot=robot,
+                                      load=load, seed=seed, rec_name=f"{sim_name}-s{seed}",
+                                      sim_seed=sim_seed(robot, load, head, seed),
+                                      sim_config=str(sp),
+                                      trajectory=str(trajectories[
+                                          (robot, seed if study["per_seed"] else None)]),
+                                      methods=methods, keep=study["keep"],
+                                      cells=[dict(noise=n, est_config=str(est_cfgs[n]))
+                                             for n in group]))
+    return tasks
+
+
+def execute(study, tasks) -> list:
+    """Runs the tasks, study["jobs"] at a time: their rows (a failed worker's
+    as rows without an estimate)."""
+    methods, log = study["methods"], study["log"]
+    rows = []
+    done = 0
+    with futures.ProcessPoolExecutor(max_workers=study["jobs"]) as pool:
+        pending = {pool.submit(run_recording, t): t for t in tasks}
+        for fut in futures.as_completed(pending):
+            try:
+                rows.extend(fut.result())
+            except Exception as err:  # noqa: BLE001  -- a bug or a dead worker: report, go on
+                t = pending[fut]
+                log(f"{t['rec_name']}: {err!r}")
+                rows.extend(dict(robot=t["robot"], load=t["load"], seed=t["seed"], noise=c["noise"],
+                                 method=m, ok=False, error=f"worker failed: {err!r}")
+                            for c in t["cells"] for m in methods + REF_METHODS)
+            done += 1
+            if done % max(1, len(tasks) // 20) == 0 or done == len(tasks):
+                log(f"{done}/{len(tasks)} recordings")
+    rows.sort(key=lambda r: (list(ROBOTS).index(r["robot"]), LOADS.index(r["load"]),
+                             list(NOISE_CELLS).index(r["noise"]), r["seed"],
+                             (methods + REF_METHODS).index(r["method"])))
+    return rows
+
+
+
+
 def parse_list(text, allowed, what):
     items = [x.strip() for x in text.split(",") if x.strip()]
     bad = [x for x in items if x not in allowed]
@@ -1610,6 +1708,10 @@ def main(argv=None) -> int:
                          "(loadid-traj --seed N): the seeds then vary the noise only, and the "
                          "trajectory's own deterministic misfit (servo lag, backlash, "
                          "quantisation) is one bias in every run of a robot")
+    ap.add_argument("--settle", type=int, default=None, metavar="N",
+                    help="run the cells that are over an accuracy target only within their 90 %% "
+                         "interval (the seeds cannot tell) again with seeds 1..N, and print "
+                         "their targets again (settle.csv has the added runs)")
     ap.add_argument("--quick", action="store_true",
                     help="3 seeds, rx60, loads o1 and box, paper noise (options given override)")
     ap.add_argument("--keep", action="store_true",
@@ -1652,6 +1754,8 @@ def main(argv=None) -> int:
     methods = [m.strip() for m in (a.methods or ",".join(DEFAULT_METHODS)).split(",") if m.strip()]
     if seeds < 1 or a.jobs < 1:
         raise SystemExit("loadid-study: --seeds and --jobs must be >= 1")
+    if a.settle is not None and a.settle <= seeds:
+        raise SystemExit(f"loadid-study: --settle {a.settle} must be over the seeds ({seeds})")
     build = pathlib.Path(a.build).resolve() if a.build else REPO / "build" / "release"
     work = (pathlib.Path(a.workdir).resolve() if a.workdir
             else pathlib.Path(tempfile.mkdtemp(prefix="loadid-study-")))
@@ -1666,77 +1770,32 @@ def main(argv=None) -> int:
     stamp = program_stamp(build)
     log(f"build {build}; work folder {work}")
 
-    # A trajectory per robot and seed (or one per robot), designed once and
-    # cached in the work folder: over the seeds the misfit a trajectory
-    # brings then varies as over the trajectories users design.
     per_seed = not a.one_trajectory
-    trajectories = {}
-    for robot in robots:
-        cfg = work / "configs" / f"traj-{robot}.yaml"
-        cfg.write_text(robot_yaml(robot))
-        for seed in (range(1, seeds + 1) if per_seed else [None]):
-            name = f"{robot}-mc300-c1-e800" + (f"-s{seed}" if seed else "")
-            tp = work / "traj" / f"{name}.yaml"
-            if not tp.is_file():
-                r = run(build, "traj", ["--config", cfg, *TRAJ_BUDGET, "--out", tp,
-                                        *(["--seed", seed] if seed else [])], log=log)
-                kappa = [l for l in r.stderr.splitlines() if "kappa_design" in l]
-                log(f"trajectory {name}: {(kappa or [r.stderr.strip()])[-1]} -> {tp}")
-            else:
-                log(f"trajectory {name}: cached {tp}")
-            trajectories[(robot, seed)] = tp
-
-    # Tasks: one per recording; cells with the same simulation share it.
-    tasks = []
-    for robot in robots:
-        est_cfgs = {}
-        for noise in noises:
-            p = work / "configs" / f"est-{robot}-{noise}.yaml"
-            p.write_text(est_config(robot, noise, methods, a.signals, a.lag, a.jerk_psd,
-                                    a.offset_model))
-            est_cfgs[noise] = p
-        for load in loads:
-            groups = {}
-            for noise in noises:
-                groups.setdefault(sim_key(noise), []).append(noise)
-            for cells in groups.values():
-                sim_name = f"{robot}-{load}-{cells[0]}"
-                sp = work / "configs" / f"sim-{sim_name}.yaml"
-                sp.write_text(sim_config(robot, load, cells[0]))
-                for seed in range(1, seeds + 1):
-                    tasks.append(dict(build=str(build), workdir=str(work), robot=robot, load=load,
-                                      seed=seed, rec_name=f"{sim_name}-s{seed}",
-                                      sim_seed=sim_seed(robot, load, cells[0], seed),
-                                      sim_config=str(sp),
-                                      trajectory=str(trajectories[
-                                          (robot, seed if per_seed else None)]),
-                                      methods=methods, keep=a.keep,
-                                      cells=[dict(noise=n, est_config=str(est_cfgs[n]))
-                                             for n in cells]))
-    ncells = len(robots) * len(loads) * len(noises)
-    log(f"{ncells} cells x {seeds} seeds: {len(tasks)} recordings, {a.jobs} jobs, "
+    study = dict(build=build, work=work, methods=methods, noises=noises, per_seed=per_seed,
+                 keep=a.keep, jobs=a.jobs, log=log,
+                 est=dict(signals=a.signals, lag=a.lag, jerk_psd=a.jerk_psd,
+                          offset_model=a.offset_model))
+    cells = [(r, l, n) for r in robots for l in loads for n in noises]
+    tasks = plan_tasks(study, cells, range(1, seeds + 1))
+    log(f"{len(cells)} cells x {seeds} seeds: {len(tasks)} recordings, {a.jobs} jobs, "
         f"methods {', '.join(methods)}")
-
-    rows = []
-    done = 0
-    with futures.ProcessPoolExecutor(max_workers=a.jobs) as pool:
-        pending = {pool.submit(run_recording, t): t for t in tasks}
-        for fut in futures.as_completed(pending):
-            try:
-                rows.extend(fut.result())
-            except Exception as err:  # noqa: BLE001  -- a bug or a dead worker: report, go on
-                t = pending[fut]
-                log(f"{t['rec_name']}: {err!r}")
-                rows.extend(dict(robot=t["robot"], load=t["load"], seed=t["seed"], noise=c["noise"],
-                                 method=m, ok=False, error=f"worker failed: {err!r}")
-                            for c in t["cells"] for m in methods + REF_METHODS)
-            done += 1
-            if done % max(1, len(tasks) // 20) == 0 or done == len(tasks):
-                log(f"{done}/{len(tasks)} recordings")
-    rows.sort(key=lambda r: (list(ROBOTS).index(r["robot"]), LOADS.index(r["load"]),
-                             list(NOISE_CELLS).index(r["noise"]), r["seed"],
-                             (methods + REF_METHODS).index(r["method"])))
+    rows = execute(study, tasks)
     summary = summarise(rows, methods)
+    targets = target_checks(summary)
+    settled, n_settle = None, 0
+    undecided = sorted({tuple(i["cell"].split("/")) for t in targets for i in t["over_in_noise"]},
+                       key=lambda c: (list(ROBOTS).index(c[0]), LOADS.index(c[1]),
+                                      list(NOISE_CELLS).index(c[2])))
+    if a.settle and undecided:
+        log(f"settling {len(undecided)} cells over a target only within their interval: seeds "
+            f"{seeds + 1}..{a.settle}")
+        settle_tasks = plan_tasks(study, undecided, range(seeds + 1, a.settle + 1))
+        n_settle = len(settle_tasks)
+        more = execute(study, settle_tasks)
+        write_csv(out_dir / "settle.csv", more)
+        mine = [r for r in rows if (r["robot"], r["load"], r["noise"]) in set(undecided)] + more
+        settled = dict(seeds=a.settle, cells=["/".join(c) for c in undecided],
+                       targets=target_checks(summarise(mine, methods)))
     changed = program_stamp(build) != stamp
     elapsed = time.monotonic() - began
 
@@ -1750,16 +1809,20 @@ def main(argv=None) -> int:
                 reference=dict(smoother=dict(degree=SMOOTH_DEGREE, half_width_s=SMOOTH_HALF_WIDTH_S),
                                zeroing_window_s=ZEROING_WINDOW_S, estimation_s=ESTIMATION_S))
     pooled = pooled_coverage(rows, methods, noises)
-    targets = target_checks(summary)
     cl = claims(rows, methods, noises)
     (out_dir / "summary.json").write_text(json.dumps(dict(meta=meta, cells=summary,
                                                           coverage_pooled=pooled,
-                                                          targets=targets, claims=cl), indent=1))
+                                                          targets=targets, claims=cl,
+                                                          settled=settled), indent=1))
 
     print(table(summary, seeds))
     print(coverage_table(pooled))
     print(claims_table(cl))
     print(targets_text(targets))
+    if settled:
+        print(targets_text(settled["targets"], settled))
+    elif a.settle:
+        print("\nsettle: no cell over a target only within its interval")
     print()
     print("mass %: |m - m_true| / m_true; COM mm: |c - c_true|; inertia %: ||I_C - I_C,true||_F / "
           "||I_C,true||_F; ratio: median / REF's median; coverage: share of |phi_i - phi_true,i| "
@@ -1779,7 +1842,8 @@ def main(argv=None) -> int:
         print("WARNING: the programs in the build tree changed during the run; results may mix "
               "builds")
     print(f"runs: {out_dir / 'runs.csv'}\nsummary: {out_dir / 'summary.json'}")
-    print(f"time taken: {elapsed:.1f} s ({len(tasks)} recordings, {len(rows)} rows)")
+    print(f"time taken: {elapsed:.1f} s ({len(tasks)} recordings, {len(rows)} rows"
+          + (f"; settling {n_settle} more" if n_settle else "") + ")")
     return 0
 
 
