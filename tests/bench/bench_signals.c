@@ -99,16 +99,23 @@ static int bench_robot(const char *path) {
     const loadid_real_t jr3_spec[3] = {0.1, 0.2, 9.8};
     loadid_regressor_input_t m, instr;
     double sink = 0;
+    /* After a reset the filters serve no sample until settled (the daemon
+     * refuses those samples as stale): not timed, and no failure. */
+    const int settle = loadid_jf_settle_steps(jf);
+    size_t i = 0;
     for (int r = 0; r < REPS; ++r) {
         loadid_signals_reset(s);
         loadid_jf_reset(jf);
         for (int k = 0; k < SAMPLES; ++k) {
             int64_t t = (int64_t)r * 10000000 + (int64_t)k * 1000;
-            size_t i = (size_t)r * SAMPLES + k;
             double t0 = now_us();
             int e1 = loadid_signals_push_joints(s, t, n, pos[k], set[k]);
             int e2 = loadid_signals_at(s, t + 300, jr3_spec, NULL, NULL, &m, &instr);
             double t1 = now_us();
+            if (e1 == 0 && e2 == LOADID_E_STALE && k <= settle) {
+                loadid_jf_update(jf, t, pos[k]);
+                continue;
+            }
             if (e1 != 0 || e2 != 0) {
                 fprintf(stderr, "bench_signals: step failed: %s\n", loadid_strerror(e1 ? e1 : e2));
                 return 1;
@@ -120,15 +127,24 @@ static int bench_robot(const char *path) {
             loadid_jf_update(jf, t, pos[k]);
             double t4 = now_us();
             t_step[i] = t1 - t0, t_fk[i] = t3 - t2, t_jf[i] = t4 - t3;
+            ++i;
             sink += m.alpha[0] + instr.spec[2] + st.spec[0];
         }
     }
-    report(robot, "step: 2 filter banks + 2 FK + select", t_step, calls);
-    report(robot, "forward kinematics alone", t_fk, calls);
-    report(robot, "one filter bank update alone", t_jf, calls);
-    qsort(t_step, calls, sizeof *t_step, cmp_double);
-    printf("%-10s target step median <= %.0f us: %s (checksum %.3g)\n", robot, kTargetStepUs,
-           t_step[calls / 2] <= kTargetStepUs ? "met" : "NOT met", sink);
+    const size_t served = i;
+    if (served == 0) {
+        fprintf(stderr, "bench_signals: no sample served\n");
+        return 1;
+    }
+    report(robot, "step: 2 filter banks + 2 FK + select", t_step, served);
+    report(robot, "forward kinematics alone", t_fk, served);
+    report(robot, "one filter bank update alone", t_jf, served);
+    qsort(t_step, served, sizeof *t_step, cmp_double);
+    printf(
+        "%-10s target step median <= %.0f us: %s (%zu of %zu steps served, the first %d after "
+        "each reset settling; checksum %.3g)\n",
+        robot, kTargetStepUs, t_step[served / 2] <= kTargetStepUs ? "met" : "NOT met", served,
+        calls, settle, sink);
     free(t_step), free(t_fk), free(t_jf);
     loadid_signals_destroy(s);
     loadid_kin_destroy(kin);
