@@ -210,8 +210,13 @@ def test_joint_stamps_delayed_in_transport(recording, tmp_path, lcmtypes):
     claim it (counted from each stamp alone, a stamp 0.75-1.25 periods late
     passed for a lost message: 300 us restarted the clock 19 times in the
     window, REFINED was 2.9 % off in mass and the others 82 %, nothing
-    claimed). Uniform jitter of 650 us, over half a period, no count fits:
-    the clock restarts, the log warns, and no method claims anything."""
+    claimed). Uniform jitter of 650 or 950 us (kept in order), over half a
+    period: the clock takes every stamp one period on (at 950 us it
+    restarts once, before START), and every method finds and claims the
+    load within the bounds and 3 phi_std (the line that left the outliers
+    out while it acquired restarted at 650 us and voided every claim). A clock stepped 3.3 ms
+    forward in the window (the host's time set) fits no count: it
+    restarts, the log warns, and no method claims anything."""
     phi, _ = truth_phi(recording)
     cfg = write_config(tmp_path / "c.yaml", "estimation:\n  methods: [RTLS, RIV, REFINED]\n")
     for name, rec in (("80 us", stamped_on_arrival(recording, tmp_path / "d80", lcmtypes, 80)),
@@ -225,13 +230,27 @@ def test_joint_stamps_delayed_in_transport(recording, tmp_path, lcmtypes):
         for est in result:
             assert_close_to_truth(est, phi)
             assert est["identified"] == ["mass", "com", "inertia"], (name, est["method"])
-    rng = np.random.default_rng(3)
-    last = [-1]
+    for jitter in (650, 950):
+        rng = np.random.default_rng(3)
+        last = [-1]
 
-    def jittered(u):
-        last[0] = max(u + int(rng.integers(-650, 651)), last[0] + 1)
-        return last[0]
-    result, err = offline(cfg, restamp_joints(recording, tmp_path / "j650", lcmtypes, jittered),
+        def jittered(u):
+            last[0] = max(u + int(rng.integers(-jitter, jitter + 1)), last[0] + 1)
+            return last[0]
+        result, err = offline(cfg, restamp_joints(recording, tmp_path / f"j{jitter}", lcmtypes,
+                                                  jittered), "--verbose")
+        assert "stamps lost" not in err, (jitter, err)
+        assert jitter > 650 or "joint stamp restarts 0" in err, err  # at 950 one, before START
+        for est in result:
+            assert_close_to_truth(est, phi)
+            assert est["identified"] == ["mass", "com", "inertia"], (jitter, est["method"])
+            assert abs(est["mass"] - phi[0]) <= 3 * est["phi_std"][0], (jitter, est["method"])
+    first = []
+
+    def stepped(u):
+        first.append(u)
+        return u + 3300 if u - first[0] >= 1700000 else u  # START at 1 s, DONE at 2.5 s
+    result, err = offline(cfg, restamp_joints(recording, tmp_path / "step", lcmtypes, stepped),
                           "--verbose")
     said = re.search(r"warning: joints: their stamps lost the stream's rate (\d+) times in the "
                      r"window .* no method claims anything", err)
