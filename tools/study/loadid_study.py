@@ -1649,8 +1649,6 @@ def execute(study, tasks) -> list:
     return rows
 
 
-
-
 def parse_list(text, allowed, what):
     items = [x.strip() for x in text.split(",") if x.strip()]
     bad = [x for x in items if x not in allowed]
