@@ -159,9 +159,8 @@ class StampClock {
         int near = 0;
         for (int j = 0; j < n; ++j)
             near += std::abs(double(r[j]) - s_.t - j * p - k * p) <= 0.25 * p;
-        // Under heavy jitter (kJitterRate) kConfirm near ones are chance.
-        if (near >= kConfirm && earliest >= (k - 0.25) * p &&
-            (full || ended || !(s_.outlier_rate > kJitterRate)))
+        // Under heavy jitter kConfirm near ones are chance.
+        if (near >= kConfirm && earliest >= (k - 0.25) * p && (full || ended || !jittery(s_)))
             return int(k);
         return full ? kNoFit : ended ? int(k) : 0;
     }
@@ -247,6 +246,16 @@ class StampClock {
         return int(std::clamp(n, double(kRestartAfter), double(kRestartAfterMax)));
     }
 
+    // The stream's outlier rate over kJitterRate: its jitter, over half a
+    // period.
+    static bool jittery(const State &s) { return s.outlier_rate > kJitterRate; }
+
+    // t_raw onto the acquiring line at the last stamp's count s.i.
+    static void on_line(State &s, int64_t t_raw) {
+        s.line.add(s.i, double(t_raw - s.t0));
+        s.period = s.line.slope();
+    }
+
     // The outlier rate with one more stamp.
     static void seen(State &s, bool outlier) {
         if (s.rated < kRateWindow) ++s.rated;
@@ -313,10 +322,7 @@ class StampClock {
         if (off && s.line.n >= kStampSlopeFrom) {
             s.i += k;
             // Under heavy jitter, on the line (not a burst's first stamp).
-            if (k == 1 && dt < 2 * p && s.outlier_rate > kJitterRate) {
-                s.line.add(s.i, double(t_raw - s.t0));
-                s.period = s.line.slope();
-            }
+            if (k == 1 && dt < 2 * p && jittery(s)) on_line(s, t_raw);
             s.t = double(s.t0) + s.line.at(s.i);
             return;
         }
@@ -326,10 +332,7 @@ class StampClock {
             if (s.line.n >= 2 && next(s)) {
                 s.i += 1;
                 // Under heavy jitter, on the line at the next period.
-                if (s.outlier_rate > kJitterRate && dt > 0) {
-                    s.line.add(s.i, double(t_raw - s.t0));
-                    s.period = s.line.slope();
-                }
+                if (jittery(s) && dt > 0) on_line(s, t_raw);
                 s.t = double(s.t0) + s.line.at(s.i);
                 return;
             }
@@ -337,8 +340,7 @@ class StampClock {
         }
         if (!off) s.outliers = s.held_off = 0, seen(s, false);
         s.i += k;
-        s.line.add(s.i, double(t_raw - s.t0));
-        s.period = s.line.slope();
+        on_line(s, t_raw);
         s.t = double(s.t0) + s.line.at(s.i);
         const double lock = std::min(std::ceil(4 / gain), double(kMaxAcquire));
         if (double(s.line.n) >= lock) s.acquiring = false;
