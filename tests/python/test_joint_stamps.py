@@ -214,9 +214,9 @@ def test_joint_stamps_delayed_in_transport(recording, tmp_path, lcmtypes):
     period: the clock takes every stamp one period on (at 950 us it
     restarts once, before START), and every method finds and claims the
     load within the bounds and 3 phi_std (the line that left the outliers
-    out while it acquired restarted at 650 us and voided every claim). A clock stepped 3.3 ms
-    forward in the window (the host's time set) fits no count: it
-    restarts, the log warns, and no method claims anything."""
+    out while it acquired restarted at 650 us and voided every claim). A
+    clock stepped 3.3 ms forward in the window (the host's time set) fits
+    no count: it restarts, the log warns, and no method claims anything."""
     phi, _ = truth_phi(recording)
     cfg = write_config(tmp_path / "c.yaml", "estimation:\n  methods: [RTLS, RIV, REFINED]\n")
     for name, rec in (("80 us", stamped_on_arrival(recording, tmp_path / "d80", lcmtypes, 80)),

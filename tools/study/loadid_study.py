@@ -1149,10 +1149,10 @@ def targets_text(checks, settled=None) -> str:
         for (g, why), n in sorted(said.items(), key=lambda kv: (-kv[1], kv[0][0])):
             lines.append(f"    said: {g} not identified ({why}) in {n} cell-metric(s)")
         for i in t["over"] + t["over_in_noise"]:
-            ci = i["ci90"]
+            ci, rms = i["ci90"], i.get("rms_ratio")
             lines.append(f"    {'OVER' if i in t['over'] else 'over'} {i['cell']} {i['metric']}: "
                          f"{i['ratio']:.3f}" + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "")
-                         + (f", RMS error ratio {i['rms_ratio']:.2f}" if i.get("rms_ratio") else ""))
+                         + (f", RMS error ratio {rms:.2f}" if rms else ""))
     return "\n".join(lines)
 
 
